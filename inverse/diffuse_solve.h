@@ -1,0 +1,29 @@
+// diffuse_solve.h: the inner step of the nested material fits (DESIGN §5).
+//
+// For a fixed R0 the shading model is linear in Rd, per channel:
+//   observed_k = specular_k + Rd * diffuse_basis_k,
+// with specular_k = F(n.v) L(r) and diffuse_basis_k = 21/(20 pi)(1 - R0) g(n.v) E(n).
+// The weighted least-squares Rd is sum w b (o - s) / sum w b^2; because the objective is
+// a convex parabola in Rd, clamping that minimiser to Rd's registered bounds is the exact
+// bounded solution, so the outer (Ceres) search over R0 sees a closed-form inner solve.
+#pragma once
+
+#include "renderer/math.h"
+
+#include <span>
+
+namespace glaze {
+
+struct DiffuseSolve {
+  RGB Rd;                       // clamped to the bounds of MaterialParameter::Rd
+  RGB unclamped;                // the unconstrained minimiser (reported: far outside means misfit)
+  RGBd weighted_squared_error;  // sum w (o - s - Rd b)^2 at the clamped Rd
+};
+
+// All spans have one entry per sample; `weights` may be empty (all 1). A channel whose
+// basis is zero in every sample (nothing constrains it) gets Rd = 0.
+DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<const RGB> specular,
+                                       std::span<const RGB> diffuse_basis,
+                                       std::span<const float> weights = {});
+
+}  // namespace glaze

@@ -1,0 +1,84 @@
+// environment.h: distant lighting from a lat-long map (DESIGN §3), the one environment
+// lookup used by the path tracer, the SH integrator and the inverse fits.
+//
+// A world direction w (pointing away from the scene) is turned into the map's frame,
+// d = local_to_world^T w, then u = atan2(d.x, -d.z) / (2 pi) mod 1, v = acos(d.y) / pi;
+// texel (i, j) has its centre at ((i + 0.5) / W, (j + 0.5) / H), row 0 is the top (+Y).
+// Lookups are bilinear, wrapping in u and clamping in v. local_to_world is the
+// `rotation` option (degrees about +Y, +Z turning towards +X) applied after `to_world`.
+#pragma once
+
+#include "renderer/image.h"
+#include "renderer/math.h"
+#include "renderer/sampling.h"
+#include "renderer/sh.h"
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace glaze {
+
+struct EnvironmentOptions {
+  float scale = 1.0f;
+  float rotation_degrees = 0.0f;
+  Mat3 to_world = Mat3::Identity();  // must be a rotation
+};
+
+struct EnvironmentSample {
+  Vec3 direction;  // world space, unit length
+  float pdf;       // solid-angle density; 0 if the sample is unusable (at a pole)
+};
+
+class Environment {
+ public:
+  // `radiance` is the map as stored (before scale). Non-finite or negative texels are
+  // set to zero with a warning naming `source` and the count. Throws glaze::Error for
+  // an empty map or a to_world that is not a rotation; warns if the map is not 2:1.
+  Environment(Image radiance, const EnvironmentOptions& options, std::string source = "environment");
+  // Loads any lat-long float image OpenImageIO reads.
+  static Environment load(const std::string& path, const EnvironmentOptions& options = {});
+
+  const std::string& source() const { return source_; }
+  const Image& map() const { return map_; }
+  float scale() const { return scale_; }
+  const Mat3& local_to_world() const { return local_to_world_; }
+
+  // Radiance arriving from world direction w (scale included).
+  RGB eval(const Vec3& w) const;
+
+  // Importance sampling: piecewise constant in (u, v) proportional to luminance times
+  // sin(theta) (with each texel's weight the maximum over its 3x3 neighbourhood, so
+  // that every direction where the bilinear lookup is non-zero can be sampled). Built
+  // on first use: a scene that never samples the environment never pays for it.
+  EnvironmentSample sample(const Vec2& u) const;
+  float pdf(const Vec3& w) const;
+
+  // SH coefficients of the (scaled, oriented) environment, computed once per lmax.
+  const ShCoefficients& sh(int lmax) const;
+
+  // Map coordinates (u, v) in [0, 1)^2 of world direction w, and back.
+  Vec2 direction_to_uv(const Vec3& w) const;
+  Vec3 uv_to_direction(const Vec2& uv) const;
+
+ private:
+  const Distribution2D& distribution() const;
+
+  Image map_;
+  float scale_;
+  Mat3 local_to_world_;
+  std::string source_;
+
+  mutable std::once_flag distribution_once_;
+  mutable std::unique_ptr<Distribution2D> distribution_;
+  mutable std::mutex sh_mutex_;
+  mutable std::map<int, ShCoefficients> sh_cache_;
+};
+
+// Parses an environment specification "procedural:NAME" or a file path and builds it;
+// `resolution` (width, height) applies to procedural maps.
+Environment make_environment(const std::string& spec, const EnvironmentOptions& options = {},
+                             int width = 1024, int height = 512);
+
+}  // namespace glaze

@@ -1,0 +1,28 @@
+// error.h: how glaze reports problems.
+//
+// Anything the user can cause (a missing file, a malformed map, a bad option) throws
+// glaze::Error with a message that names the input, says what is wrong and, where
+// possible, what to do. The command line prints it and exits non-zero. Warnings go
+// through one replaceable sink so that tests can observe them.
+#pragma once
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace glaze {
+
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+using WarningSink = std::function<void(const std::string&)>;
+
+// Emits a warning (default: "glaze: warning: ..." on stderr).
+void warn(const std::string& message);
+
+// Replaces the warning sink; returns the previous one. Not thread-safe: set it up front.
+WarningSink set_warning_sink(WarningSink sink);
+
+}  // namespace glaze

@@ -1,0 +1,45 @@
+// image.h: float images and their files, through OpenImageIO.
+//
+// Reading accepts anything OpenImageIO reads (EXR, HDR, PFM, PNG, ...) and converts to
+// linear float RGB; failures become glaze::Error naming the file. Writing goes to a
+// temporary file in the same directory that is renamed over the target only when
+// complete, so a good file is never replaced by a half-written one.
+#pragma once
+
+#include "renderer/math.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace glaze {
+
+// An RGB float image, row-major, row 0 at the top.
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<float> pixels;  // width * height * 3
+
+  Image() = default;
+  Image(int w, int h) : width(w), height(h), pixels(size_t(w) * size_t(h) * 3, 0.0f) {}
+
+  RGB at(int x, int y) const {
+    const float* p = &pixels[(size_t(y) * width + x) * 3];
+    return {p[0], p[1], p[2]};
+  }
+  void set(int x, int y, const RGB& c) {
+    float* p = &pixels[(size_t(y) * width + x) * 3];
+    p[0] = c[0], p[1] = c[1], p[2] = c[2];
+  }
+};
+
+// Reads `path` as linear RGB (grey is replicated, alpha and extra channels dropped).
+// Throws glaze::Error for a missing, unreadable, truncated or empty image.
+Image read_image(const std::string& path);
+
+// Writes `image` (format from the extension; .exr is written as float) with string
+// metadata attributes, atomically. Throws glaze::Error on failure.
+void write_image(const std::string& path, const Image& image,
+                 const std::map<std::string, std::string>& metadata = {});
+
+}  // namespace glaze

@@ -1,0 +1,28 @@
+// latlong.h: the lat-long parameterisation of directions (DESIGN §3), in a map's own
+// frame: u = atan2(d.x, -d.z) / (2 pi) mod 1, v = acos(d.y) / pi, row 0 at +Y.
+#pragma once
+
+#include "renderer/math.h"
+
+namespace glaze {
+
+inline Vec3 latlong_to_direction(const Vec2& uv) {
+  const float theta = uv.y() * kPi, phi = uv.x() * 2.0f * kPi;
+  const float sin_theta = std::sin(theta);
+  return {sin_theta * std::sin(phi), std::cos(theta), -sin_theta * std::cos(phi)};
+}
+
+// sin(theta) of direction d (need not be normalised), accurate near the poles too.
+inline float latlong_sin_theta(const Vec3& d) { return std::hypot(d.x(), d.z()) / d.norm(); }
+
+// d need not be normalised. theta comes from atan2, which keeps full relative precision
+// near the poles where acos(d.y) loses it (that matters to sampling densities there).
+inline Vec2 direction_to_latlong(const Vec3& d) {
+  float u = std::atan2(d.x(), -d.z()) * (0.5f / kPi);
+  if (u < 0.0f) u += 1.0f;
+  if (u >= 1.0f) u = 0.0f;  // u = -0 rounds onto 1
+  const float v = std::atan2(std::hypot(d.x(), d.z()), d.y()) / kPi;
+  return {u, std::min(v, 1.0f)};
+}
+
+}  // namespace glaze

@@ -1,0 +1,111 @@
+#include "renderer/material.h"
+
+#include "renderer/error.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace glaze {
+
+const ParameterSpec& parameter_spec(MaterialParameter id) {
+  for (const ParameterSpec& spec : kMaterialParameters)
+    if (spec.id == id) return spec;
+  throw std::logic_error("parameter_spec: unregistered material parameter");
+}
+
+namespace {
+
+void check_in_bounds(MaterialParameter id, float value) {
+  const ParameterSpec& spec = parameter_spec(id);
+  if (!(value >= spec.lower && value <= spec.upper)) {  // also rejects NaN
+    std::ostringstream message;
+    message << "material parameter " << spec.name << " = " << value << " is outside ["
+            << spec.lower << ", " << spec.upper << "] (" << spec.description << ")";
+    throw Error(message.str());
+  }
+}
+
+// CDF of mu under the diffuse-lobe density (21/10) g(mu) mu on [0, 1]:
+// (21/10) (5/3 mu^3 - 5/2 mu^4 + 2 mu^5 - 5/6 mu^6 + 1/7 mu^7), with its derivative.
+double diffuse_lobe_cdf(double mu, double* density) {
+  *density = 2.1 * mu * coat_transmittance_g(mu);
+  return 2.1 * mu * mu * mu *
+         (5.0 / 3.0 + mu * (-2.5 + mu * (2.0 + mu * (-5.0 / 6.0 + mu * (1.0 / 7.0)))));
+}
+
+}  // namespace
+
+float diffuse_lobe_pdf(float cos_theta) {
+  if (!(cos_theta > 0.0f)) return 0.0f;
+  return static_cast<float>(kDiffuseNormalisation) * coat_transmittance_g(cos_theta) * cos_theta;
+}
+
+Vec3 sample_diffuse_lobe(const Vec2& u) {
+  // Invert the CDF of mu by Newton's method safeguarded by bisection; the CDF is a
+  // monotone polynomial, so this converges in a handful of steps.
+  const double target = std::clamp(static_cast<double>(u.x()), 0.0, 1.0);
+  double low = 0.0, high = 1.0;
+  double mu = std::cbrt(target / 3.5);  // C(mu) ~ 3.5 mu^3 near 0
+  for (int iteration = 0; iteration < 40; ++iteration) {
+    double density = 0.0;
+    const double error = diffuse_lobe_cdf(mu, &density) - target;
+    if (error > 0.0) high = mu; else low = mu;
+    double next = density > 0.0 ? mu - error / density : 0.5 * (low + high);
+    if (!(next > low && next < high)) next = 0.5 * (low + high);
+    if (std::abs(next - mu) < 1e-12) { mu = next; break; }
+    mu = next;
+  }
+  const float cos_theta = static_cast<float>(std::clamp(mu, 0.0, 1.0));
+  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+  const float phi = 2.0f * kPi * u.y();
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+
+PolishedMaterial::PolishedMaterial(float R0, const RGB& Rd) : R0_(R0), Rd_(Rd) {
+  check_in_bounds(MaterialParameter::R0, R0);
+  for (int c = 0; c < 3; ++c) check_in_bounds(MaterialParameter::Rd, Rd[c]);
+}
+
+RGB PolishedMaterial::eval_diffuse(const Vec3& wo, const Vec3& wi) const {
+  if (!(wo.z() > 0.0f && wi.z() > 0.0f)) return RGB::Zero();
+  return Rd_ * diffuse_factor(R0_, wi.z(), wo.z());
+}
+
+float PolishedMaterial::specular_probability(const Vec3& wo) const {
+  const float specular = fresnel(wo.z());
+  const float diffuse = Rd_.mean() * (1.0f - specular);
+  const float total = specular + diffuse;
+  return total > 0.0f ? specular / total : 0.0f;
+}
+
+std::optional<MaterialSample> PolishedMaterial::sample(const Vec3& wo, float u_lobe,
+                                                       const Vec2& u) const {
+  if (!(wo.z() > 0.0f)) return std::nullopt;
+  const float mu_o = wo.z();
+  const float specular = fresnel(mu_o);
+  if (specular <= 0.0f && (Rd_ <= 0.0f).all()) return std::nullopt;  // reflects nothing
+  const float p_specular = specular_probability(wo);
+  if (u_lobe < p_specular) {
+    return MaterialSample{Vec3(-wo.x(), -wo.y(), wo.z()), RGB::Constant(specular / p_specular),
+                          p_specular, true};
+  }
+  const Vec3 wi = sample_diffuse_lobe(u);
+  const float p_diffuse = 1.0f - p_specular;
+  // f_d cos / pdf with pdf exactly proportional to g(mu_i) mu_i: only the outgoing
+  // factor remains, so the estimate carries no noise from the BRDF itself.
+  const RGB weight = Rd_ * ((1.0f - R0_) * coat_transmittance_g(mu_o) / p_diffuse);
+  return MaterialSample{wi, weight, p_diffuse * diffuse_lobe_pdf(wi.z()), false};
+}
+
+float PolishedMaterial::pdf_diffuse(const Vec3& wo, const Vec3& wi) const {
+  if (!(wo.z() > 0.0f)) return 0.0f;
+  return (1.0f - specular_probability(wo)) * diffuse_lobe_pdf(wi.z());
+}
+
+RGB PolishedMaterial::albedo(float mu_o) const {
+  if (!(mu_o > 0.0f)) return RGB::Zero();
+  const float F = fresnel(mu_o);
+  return F + Rd_ * (1.0f - F);
+}
+
+}  // namespace glaze

@@ -1,0 +1,57 @@
+// math.h: the small value types every other file speaks in.
+//
+// Directions and points are Eigen fixed-size vectors; colours are Eigen arrays, so
+// that `a * b` on colours is component-wise. Rendering runs in float; quantities that
+// sum over many terms (SH projection, quadrature) accumulate in double.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace glaze {
+
+using Vec2 = Eigen::Vector2f;
+using Vec3 = Eigen::Vector3f;
+using Vec3d = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3f;
+using Mat3d = Eigen::Matrix3d;
+using RGB = Eigen::Array3f;
+using RGBd = Eigen::Array3d;
+
+inline constexpr float kPi = std::numbers::pi_v<float>;
+inline constexpr double kPiD = std::numbers::pi;
+
+template <typename T>
+constexpr T clamp01(T x) {
+  return std::clamp(x, T(0), T(1));
+}
+
+// Rec. 709 / sRGB-primaries luminance of linear RGB.
+inline float luminance(const RGB& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+// Rotation by `degrees` about +Y (right-handed: +Z turns towards +X).
+inline Mat3 rotation_about_y(float degrees) {
+  return Eigen::AngleAxisf(degrees * kPi / 180.0f, Vec3::UnitY()).toRotationMatrix();
+}
+
+// An orthonormal frame with `n` as its local +Z (Duff et al. 2017, branchless), so that
+// shading code can work with cos(theta) = local z.
+struct Frame {
+  Vec3 s, t, n;
+
+  static Frame from_normal(const Vec3& n) {
+    const float sign = std::copysign(1.0f, n.z());
+    const float a = -1.0f / (sign + n.z());
+    const float b = n.x() * n.y() * a;
+    return {Vec3(1.0f + sign * n.x() * n.x() * a, sign * b, -sign * n.x()),
+            Vec3(b, sign + n.y() * n.y() * a, -n.y()), n};
+  }
+  Vec3 to_local(const Vec3& v) const { return {v.dot(s), v.dot(t), v.dot(n)}; }
+  Vec3 to_world(const Vec3& v) const { return s * v.x() + t * v.y() + n * v.z(); }
+};
+
+}  // namespace glaze

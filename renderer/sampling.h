@@ -1,0 +1,48 @@
+// sampling.h: piecewise-constant distributions (pbrt's PiecewiseConstant1D/2D), each
+// sampling routine next to its PDF. Used for environment importance sampling.
+#pragma once
+
+#include "renderer/math.h"
+
+#include <span>
+#include <vector>
+
+namespace glaze {
+
+// A piecewise-constant density on [0, 1) with n equal bins proportional to `weights`
+// (non-negative; if all are zero the density is uniform).
+class Distribution1D {
+ public:
+  explicit Distribution1D(std::span<const float> weights);
+
+  int size() const { return static_cast<int>(func_.size()); }
+  // Mean of the weights (the integral of the unnormalised function over [0, 1)).
+  double integral() const { return integral_; }
+
+  // Maps u in [0, 1) to x in [0, 1) with density pdf(x); never picks a zero-weight bin.
+  float sample(float u, float* pdf, int* bin) const;
+  float pdf(float x) const;
+
+ private:
+  std::vector<float> func_;
+  std::vector<float> cdf_;  // size n + 1, cdf_[0] = 0, cdf_[n] = 1
+  double integral_ = 0.0;
+};
+
+// A piecewise-constant density on [0, 1)^2 over a width x height grid of weights (row
+// major, row 0 at y = 0): a marginal over rows, then a conditional within the row.
+class Distribution2D {
+ public:
+  Distribution2D(std::span<const float> weights, int width, int height);
+
+  // Maps u in [0, 1)^2 to (x, y) in [0, 1)^2 with density pdf(x, y) (w.r.t. area).
+  Vec2 sample(const Vec2& u, float* pdf) const;
+  float pdf(const Vec2& p) const;
+
+ private:
+  int width_, height_;
+  std::vector<Distribution1D> rows_;
+  Distribution1D marginal_;
+};
+
+}  // namespace glaze

@@ -1,0 +1,132 @@
+// sh.h: real spherical harmonics and the SH half of the shading model (DESIGN §2).
+//
+// Convention: real SH *without* the Condon-Shortley phase (Ramamoorthi-Hanrahan,
+// three.js), polar axis +Z of world space, flat index l(l+1)+m, so that
+// Y00 = 0.282095, Y1-1 = 0.488603 y, Y10 = 0.488603 z, Y11 = 0.488603 x.
+// The basis is evaluated by the stable recurrence of the fully normalised associated
+// Legendre functions, for any lmax up to kShMaxLmax.
+#pragma once
+
+#include "renderer/image.h"
+#include "renderer/math.h"
+
+#include <span>
+#include <vector>
+
+namespace glaze {
+
+inline constexpr int kShMaxLmax = 64;
+
+constexpr int sh_count(int lmax) { return (lmax + 1) * (lmax + 1); }
+constexpr int sh_index(int l, int m) { return l * (l + 1) + m; }
+
+namespace detail {
+// Recurrence factors a_lm, b_lm of the normalised Legendre recurrence, index l(l+1)/2+m.
+struct LegendreTable {
+  std::vector<double> a, b;
+  LegendreTable();
+};
+const LegendreTable& legendre_table();
+void check_lmax(int lmax);
+}  // namespace detail
+
+// Calls visit(index, Y_index(d)) for every basis function with l <= lmax, for a unit
+// direction d = (x, y, z). Y_lm = sqrt(2) N_l^|m|(z) Re/Im (x + i y)^|m| for m > 0 / m < 0,
+// where N_l^m(z) sin^m(theta) is the normalised associated Legendre function; writing it
+// with (x + i y)^m avoids atan2 and square roots and is exact at the poles.
+template <typename T, typename Visit>
+void for_each_sh(int lmax, T x, T y, T z, Visit&& visit) {
+  const detail::LegendreTable& table = detail::legendre_table();
+  const T sqrt2 = T(1.4142135623730951);
+  T diagonal = T(0.28209479177387814);  // N_0^0 = 1 / sqrt(4 pi)
+  T re = T(1), im = T(0);                // (x + i y)^m
+  for (int m = 0; m <= lmax; ++m) {
+    if (m > 0) {
+      diagonal *= T(std::sqrt((2.0 * m + 1.0) / (2.0 * m)));
+      const T next_re = re * x - im * y;
+      im = re * y + im * x;
+      re = next_re;
+    }
+    auto emit = [&](int l, T legendre) {
+      if (m == 0) {
+        visit(sh_index(l, 0), legendre);
+      } else {
+        visit(sh_index(l, m), sqrt2 * legendre * re);
+        visit(sh_index(l, -m), sqrt2 * legendre * im);
+      }
+    };
+    emit(m, diagonal);
+    if (m == lmax) break;
+    T previous = diagonal;
+    T current = T(std::sqrt(2.0 * m + 3.0)) * z * diagonal;
+    emit(m + 1, current);
+    for (int l = m + 2; l <= lmax; ++l) {
+      const int k = l * (l + 1) / 2 + m;
+      const T next = T(table.a[k]) * (z * current - T(table.b[k]) * previous);
+      emit(l, next);
+      previous = current;
+      current = next;
+    }
+  }
+}
+
+// All sh_count(lmax) basis values at unit direction d.
+template <typename T>
+void sh_eval(int lmax, const Eigen::Matrix<T, 3, 1>& d, std::span<T> out) {
+  detail::check_lmax(lmax);
+  for_each_sh(lmax, d.x(), d.y(), d.z(), [&](int i, T value) { out[i] = value; });
+}
+
+// Lambda_l = sqrt(4 pi / (2l + 1)).
+double sh_lambda(int l);
+
+// h_l = 2 pi int_0^1 g(mu) mu N_l^0(mu) dmu: the SH coefficients of the clamped coat
+// kernel g(mu) max(mu, 0). Computed by Gauss-Legendre quadrature that is exact for the
+// polynomial integrand, for any l (h_0..h_4 = 0.8440, 1.0051, 0.5308, 0.0326, -0.1271).
+double sh_kernel_coefficient(int l);
+
+// Fraction of the kernel's energy (its squared L2 norm on the sphere) kept by l <= lmax;
+// 99.73% at lmax = 4. The kernel is not band-limited, so this is < 1 for every lmax.
+double sh_kernel_energy_fraction(int lmax);
+
+// SH coefficients of an RGB function on the sphere (lighting L_lm).
+struct ShCoefficients {
+  int lmax = 0;
+  std::vector<RGBd> values;  // sh_count(lmax), index l(l+1)+m
+
+  explicit ShCoefficients(int lmax_ = 0) : lmax(lmax_), values(sh_count(lmax_), RGBd::Zero()) {}
+  RGBd& operator()(int l, int m) { return values[sh_index(l, m)]; }
+  const RGBd& operator()(int l, int m) const { return values[sh_index(l, m)]; }
+
+  // sum_lm L_lm Y_lm(d): the band-limited reconstruction at unit direction d.
+  RGB eval(const Vec3& d) const;
+};
+
+// Coefficients of f(R^T w) given those of f(w): f rotated by the rotation R. Each band
+// is rotated by the (2l+1)^2 matrix that maps the band's basis onto its rotated self,
+// found by least squares over well-spread directions (exact to rounding, any lmax).
+ShCoefficients sh_rotate(const ShCoefficients& coefficients, const Mat3d& rotation);
+
+// Projects a lat-long RGB map (DESIGN §3 mapping, in the map's own frame) whose frame is
+// turned into world space by `local_to_world`: L_lm = sum over texels of L * the exact
+// integral of Y_lm over the texel's solid angle, accumulated in double. Integrating the
+// basis over each texel (rather than sampling it at the centre) makes the projection
+// exact for the piecewise-constant map: a constant map has L00 = 2 sqrt(pi) and every
+// other coefficient zero to rounding, at any resolution, down to 1x1.
+ShCoefficients sh_project_latlong(const Image& map, const Mat3& local_to_world, int lmax);
+
+// The SH half of DESIGN §2: E(n) = sum_l Lambda_l h_l sum_m L_lm Y_lm(n). The diffuse
+// radiance is then 21/(20 pi) Rd (1 - R0) g(n.v) E(n) (see shading.h). For a constant
+// environment of radiance c, E = 20 pi / 21 * c.
+class ShDiffuseSum {
+ public:
+  explicit ShDiffuseSum(const ShCoefficients& lighting);
+  int lmax() const { return lmax_; }
+  RGB operator()(const Vec3& n) const;
+
+ private:
+  int lmax_;
+  std::vector<float> weighted_;  // Lambda_l h_l L_lm, 3 floats per coefficient
+};
+
+}  // namespace glaze

@@ -1,0 +1,108 @@
+// Tests of the `glaze` command as a user meets it: output formats, and bad input giving
+// a clear message and a non-zero exit status, never a crash.
+#include "renderer/environment.h"
+#include "renderer/image.h"
+#include "renderer/procedural_environment.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+
+namespace glaze {
+namespace {
+
+struct CommandResult {
+  int exit_code;
+  bool crashed;
+  std::string out, err;
+};
+
+CommandResult glaze(const std::string& arguments, const testing::TemporaryDirectory& dir) {
+  const std::string err_file = dir.file("stderr.txt");
+  const std::string command = std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
+  FILE* pipe = popen(command.c_str(), "r");
+  CommandResult run{};
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.crashed = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) >= 128);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream stream(err_file);
+  run.err.assign(std::istreambuf_iterator<char>(stream), {});
+  return run;
+}
+
+void expect_clear_failure(const CommandResult& run, const std::string& must_mention) {
+  EXPECT_FALSE(run.crashed) << run.err;
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("glaze: error:"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find(must_mention), std::string::npos) << run.err;
+}
+
+TEST(Cli, ShPrintsJsonWithTheRequestedBand) {
+  testing::TemporaryDirectory dir;
+  const CommandResult run = glaze("sh procedural:constant --lmax 3 --res 64x32", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto json = nlohmann::json::parse(run.out);
+  EXPECT_EQ(json["lmax"], 3);
+  ASSERT_EQ(json["L_lm"].size(), 16u);
+  EXPECT_NEAR(json["L_lm"][0][1].get<double>(), 2 * std::sqrt(kPiD), 1e-9);
+  EXPECT_LT(std::abs(json["L_lm"][5][0].get<double>()), 1e-6);
+}
+
+TEST(Cli, ProceduralMapWrittenToFileProjectsLikeTheGeneratedOne) {
+  testing::TemporaryDirectory dir;
+  ASSERT_EQ(glaze("env procedural blue-room --out " + dir.file("blue.exr") + " --res 128x64", dir).exit_code, 0);
+  const CommandResult from_file = glaze("sh " + dir.file("blue.exr") + " --scale 2 --rotation 45", dir);
+  const CommandResult generated = glaze("sh procedural:blue-room --res 128x64 --scale 2 --rotation 45", dir);
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  const auto a = nlohmann::json::parse(from_file.out)["L_lm"], b = nlohmann::json::parse(generated.out)["L_lm"];
+  ASSERT_EQ(a.size(), 25u);
+  for (size_t i = 0; i < a.size(); ++i)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[i][c].get<double>(), b[i][c].get<double>(), 1e-9) << i;
+}
+
+TEST(Cli, BadInputGivesClearErrors) {
+  testing::TemporaryDirectory dir;
+  expect_clear_failure(glaze("sh " + dir.file("missing.exr"), dir), "missing.exr");
+  std::ofstream(dir.file("text.hdr")) << "not an image";
+  expect_clear_failure(glaze("sh " + dir.file("text.hdr"), dir), "text.hdr");
+  write_image(dir.file("full.exr"), make_procedural_environment("office", 128, 64));
+  std::filesystem::copy_file(dir.file("full.exr"), dir.file("cut.exr"));
+  std::filesystem::resize_file(dir.file("cut.exr"), std::filesystem::file_size(dir.file("full.exr")) / 3);
+  expect_clear_failure(glaze("sh " + dir.file("cut.exr"), dir), "cut.exr");
+  expect_clear_failure(glaze("sh procedural:attic", dir), "known: constant, office, blue-room");
+  expect_clear_failure(glaze("sh procedural:office --lmax 99", dir), "lmax");
+  expect_clear_failure(glaze("sh procedural:office --lmax two", dir), "--lmax");
+  expect_clear_failure(glaze("sh procedural:office --to-world 1,0,0,0,1,0", dir), "--to-world");
+  expect_clear_failure(glaze("sh procedural:office --to-world 2,0,0,0,1,0,0,0,1", dir), "rotation");
+  expect_clear_failure(glaze("sh procedural:office --bogus 1", dir), "--bogus");
+  expect_clear_failure(glaze("frobnicate", dir), "frobnicate");
+  expect_clear_failure(glaze("env procedural office --out " + dir.file("no/such/dir/x.exr"), dir), "x.exr");
+}
+
+TEST(Cli, NonTwoToOneMapWarnsButWorks) {
+  testing::TemporaryDirectory dir;
+  Image square(16, 16);
+  std::fill(square.pixels.begin(), square.pixels.end(), 1.0f);
+  write_image(dir.file("square.exr"), square);
+  const CommandResult run = glaze("sh " + dir.file("square.exr") + " --lmax 1", dir);
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_NE(run.err.find("not 2:1"), std::string::npos) << run.err;
+}
+
+TEST(Cli, DemoRunsOnTheEmbeddedDefault) {
+  testing::TemporaryDirectory dir;
+  const CommandResult run = glaze("demo", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("white furnace"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace glaze
