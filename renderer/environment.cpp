@@ -97,10 +97,11 @@ const Distribution2D& Environment::distribution() const {
 EnvironmentSample Environment::sample(const Vec2& u) const {
   float pdf_uv = 0.0f;
   const Vec2 uv = distribution().sample(u, &pdf_uv);
-  const float sin_theta = std::sin(uv.y() * kPi);
+  float sin_theta = 0.0f;
+  const Vec3 d = latlong_to_direction(uv, &sin_theta);
   if (!(sin_theta > 0.0f) || !(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
   // (u, v) -> direction has Jacobian 2 pi^2 sin(theta).
-  return {uv_to_direction(uv), pdf_uv / (2.0f * kPi * kPi * sin_theta)};
+  return {local_to_world_ * d, pdf_uv / (2.0f * kPi * kPi * sin_theta)};
 }
 
 float Environment::pdf(const Vec3& w) const {

@@ -5,45 +5,55 @@
 
 namespace glaze {
 
-Distribution1D::Distribution1D(std::span<const float> weights)
-    : func_(weights.begin(), weights.end()), cdf_(weights.size() + 1) {
-  if (func_.empty()) throw std::invalid_argument("Distribution1D: no weights");
-  const int n = size();
+Distribution1D::Distribution1D(std::span<const float> weights) {
+  const int n = static_cast<int>(weights.size());
+  if (n == 0) throw std::invalid_argument("Distribution1D: no weights");
   // Accumulate in double so that long rows of tiny weights keep their relative order.
-  std::vector<double> running(n + 1, 0.0);
+  std::vector<double> func(n), running(n + 1, 0.0);
   for (int i = 0; i < n; ++i) {
-    const double w = func_[i] > 0.0f ? func_[i] : 0.0;  // also maps NaN to 0
-    func_[i] = static_cast<float>(w);
-    running[i + 1] = running[i] + w;
+    func[i] = weights[i] > 0.0f ? weights[i] : 0.0;  // also maps NaN to 0
+    running[i + 1] = running[i] + func[i];
+  }
+  if (running[n] <= 0.0) {  // nothing to prefer: uniform
+    std::fill(func.begin(), func.end(), 1.0);
+    for (int i = 0; i <= n; ++i) running[i] = i;
   }
   integral_ = running[n] / n;
-  if (running[n] <= 0.0) {
-    std::fill(func_.begin(), func_.end(), 1.0f);
-    for (int i = 0; i <= n; ++i) running[i] = i;
-    integral_ = 1.0;
+  bins_.resize(n + 1);
+  for (int i = 0; i <= n; ++i) bins_[i].cdf = static_cast<float>(running[i] / running[n]);
+  bins_[n] = {1.0f, 0.0f, 0.0f};
+  for (int i = 0; i < n; ++i) {
+    bins_[i].pdf = static_cast<float>(func[i] / integral_);
+    const float width = bins_[i + 1].cdf - bins_[i].cdf;
+    bins_[i].inverse_width = width > 0.0f ? 1.0f / width : 0.0f;
   }
-  for (int i = 0; i <= n; ++i) cdf_[i] = static_cast<float>(running[i] / running[n]);
-  cdf_[n] = 1.0f;
+  inverse_size_ = 1.0f / n;
+  guide_.resize(n);
+  int bin = 0;
+  for (int k = 0; k < n; ++k) {
+    const float start = static_cast<float>(k) / n;
+    while (bin < n - 1 && bins_[bin + 1].cdf <= start) ++bin;
+    guide_[k] = bin;
+  }
 }
 
 float Distribution1D::sample(float u, float* pdf, int* bin) const {
   const int n = size();
-  // First cdf entry > u; its predecessor opens a bin of non-zero width containing u.
-  const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), u);
-  int i = static_cast<int>(it - cdf_.begin()) - 1;
-  i = std::clamp(i, 0, n - 1);
-  while (i > 0 && func_[i] == 0.0f) --i;  // only reachable for u rounding onto cdf_[n]
-  const float width = cdf_[i + 1] - cdf_[i];
-  float du = width > 0.0f ? (u - cdf_[i]) / width : 0.5f;
-  du = std::clamp(du, 0.0f, 1.0f);
-  if (pdf) *pdf = static_cast<float>(func_[i] / integral_);
+  // The bin i with cdf_i <= u < cdf_i+1 (so of non-zero width): start from the guide
+  // entry, at or before it, and walk forward.
+  int i = guide_[std::clamp(static_cast<int>(u * n), 0, n - 1)];
+  while (i < n - 1 && bins_[i + 1].cdf <= u) ++i;
+  while (i > 0 && bins_[i].cdf > u) --i;        // u * n may round up onto the next guide entry
+  while (i > 0 && bins_[i].pdf == 0.0f) --i;    // only reachable for u rounding onto 1
+  const Bin& chosen = bins_[i];
+  const float du = std::clamp((u - chosen.cdf) * chosen.inverse_width, 0.0f, 1.0f);
+  if (pdf) *pdf = chosen.pdf;
   if (bin) *bin = i;
-  return std::min((i + du) / n, 0x1.fffffep-1f);
+  return std::min((i + du) * inverse_size_, 0x1.fffffep-1f);
 }
 
 float Distribution1D::pdf(float x) const {
-  const int i = std::clamp(static_cast<int>(x * size()), 0, size() - 1);
-  return static_cast<float>(func_[i] / integral_);
+  return bins_[std::clamp(static_cast<int>(x * size()), 0, size() - 1)].pdf;
 }
 
 Distribution2D::Distribution2D(std::span<const float> weights, int width, int height)

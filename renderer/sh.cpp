@@ -16,6 +16,12 @@ LegendreTable::LegendreTable() {
   const int size = (kShMaxLmax + 1) * (kShMaxLmax + 2) / 2;
   a.assign(size, 0.0);
   b.assign(size, 0.0);
+  diagonal_step.assign(kShMaxLmax + 1, 1.0);
+  first_step.assign(kShMaxLmax + 1, 0.0);
+  for (int m = 0; m <= kShMaxLmax; ++m) {
+    if (m > 0) diagonal_step[m] = std::sqrt((2.0 * m + 1.0) / (2.0 * m));
+    first_step[m] = std::sqrt(2.0 * m + 3.0);
+  }
   for (int l = 2; l <= kShMaxLmax; ++l) {
     for (int m = 0; m <= l - 2; ++m) {
       const int k = l * (l + 1) / 2 + m;

@@ -24,6 +24,8 @@ namespace detail {
 // Recurrence factors a_lm, b_lm of the normalised Legendre recurrence, index l(l+1)/2+m.
 struct LegendreTable {
   std::vector<double> a, b;
+  std::vector<double> diagonal_step;  // N_m^m / N_(m-1)^(m-1) = sqrt((2m + 1) / (2m))
+  std::vector<double> first_step;     // N_(m+1)^m / (z N_m^m) = sqrt(2m + 3)
   LegendreTable();
 };
 const LegendreTable& legendre_table();
@@ -42,7 +44,7 @@ void for_each_sh(int lmax, T x, T y, T z, Visit&& visit) {
   T re = T(1), im = T(0);                // (x + i y)^m
   for (int m = 0; m <= lmax; ++m) {
     if (m > 0) {
-      diagonal *= T(std::sqrt((2.0 * m + 1.0) / (2.0 * m)));
+      diagonal *= T(table.diagonal_step[m]);
       const T next_re = re * x - im * y;
       im = re * y + im * x;
       re = next_re;
@@ -58,7 +60,7 @@ void for_each_sh(int lmax, T x, T y, T z, Visit&& visit) {
     emit(m, diagonal);
     if (m == lmax) break;
     T previous = diagonal;
-    T current = T(std::sqrt(2.0 * m + 3.0)) * z * diagonal;
+    T current = T(table.first_step[m]) * z * diagonal;
     emit(m + 1, current);
     for (int l = m + 2; l <= lmax; ++l) {
       const int k = l * (l + 1) / 2 + m;
