@@ -1,6 +1,7 @@
 // main.cpp: the `glaze` command. Thin by design: it parses arguments, calls the
 // renderer and inverse libraries, prints results, and turns glaze::Error into a clear
 // message and a non-zero exit status.
+#include "app/arguments.h"
 #include "renderer/environment.h"
 #include "renderer/error.h"
 #include "renderer/material.h"
@@ -14,8 +15,6 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
-#include <map>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -42,86 +41,15 @@ options of `sh`:
   --res WxH           resolution of a procedural map (default 1024x512)
 )";
 
-// Command-line arguments: positionals and --key value options, checked against the
-// options a command accepts.
-class Arguments {
- public:
-  Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed) {
-    for (size_t i = 0; i < args.size(); ++i) {
-      const std::string& arg = args[i];
-      if (arg.starts_with("--")) {
-        const std::string key = arg.substr(2);
-        if (!allowed.count(key)) throw Error("unknown option --" + key + " (see `glaze help`)");
-        if (i + 1 >= args.size()) throw Error("option --" + key + " needs a value");
-        options_[key] = args[++i];
-      } else {
-        positionals_.push_back(arg);
-      }
-    }
-  }
-  const std::vector<std::string>& positionals() const { return positionals_; }
-  bool has(const std::string& key) const { return options_.count(key) > 0; }
-  std::string get(const std::string& key, const std::string& fallback) const {
-    auto it = options_.find(key);
-    return it == options_.end() ? fallback : it->second;
-  }
-  double number(const std::string& key, double fallback) const {
-    if (!has(key)) return fallback;
-    const std::string text = options_.at(key);
-    try {
-      size_t used = 0;
-      const double value = std::stod(text, &used);
-      if (used == text.size() && std::isfinite(value)) return value;
-    } catch (const std::exception&) {
-    }
-    throw Error("option --" + key + ": '" + text + "' is not a finite number");
-  }
-  int integer(const std::string& key, int fallback) const {
-    const double value = number(key, fallback);
-    if (value != std::floor(value)) throw Error("option --" + key + " must be an integer");
-    return static_cast<int>(value);
-  }
-  std::pair<int, int> resolution(const std::string& key, std::pair<int, int> fallback) const {
-    if (!has(key)) return fallback;
-    const std::string text = options_.at(key);
-    int width = 0, height = 0;
-    char tail = 0;
-    if (std::sscanf(text.c_str(), "%dx%d%c", &width, &height, &tail) != 2 || width <= 0 || height <= 0)
-      throw Error("option --" + key + ": '" + text + "' is not a resolution like 1024x512");
-    return {width, height};
-  }
-  std::vector<double> numbers(const std::string& key) const {
-    std::vector<double> values;
-    std::string text = get(key, "");
-    size_t start = 0;
-    while (start <= text.size() && !text.empty()) {
-      const size_t comma = text.find(',', start);
-      const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-      try {
-        values.push_back(std::stod(item));
-      } catch (const std::exception&) {
-        throw Error("option --" + key + ": '" + item + "' is not a number");
-      }
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-    return values;
-  }
-
- private:
-  std::vector<std::string> positionals_;
-  std::map<std::string, std::string> options_;
-};
-
 EnvironmentOptions environment_options(const Arguments& args) {
   EnvironmentOptions options;
-  options.scale = static_cast<float>(args.number("scale", 1.0));
-  options.rotation_degrees = static_cast<float>(args.number("rotation", 0.0));
+  options.scale = args.real("scale", 1.0f);
+  options.rotation_degrees = args.real("rotation", 0.0f);
   if (args.has("to-world")) {
-    const std::vector<double> values = args.numbers("to-world");
+    const std::vector<float> values = args.reals("to-world");
     if (values.size() != 9) throw Error("option --to-world needs 9 comma-separated numbers (row-major 3x3)");
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) options.to_world(r, c) = static_cast<float>(values[r * 3 + c]);
+      for (int c = 0; c < 3; ++c) options.to_world(r, c) = values[r * 3 + c];
   }
   return options;
 }
@@ -135,10 +63,13 @@ nlohmann::json sh_json(const ShCoefficients& coefficients) {
 int command_sh(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"lmax", "scale", "rotation", "to-world", "res"});
   if (args.positionals().size() != 1) throw Error("usage: glaze sh ENV [--lmax N] (see `glaze help`)");
+  const std::string& spec = args.positionals()[0];
+  if (args.has("res") && !spec.starts_with("procedural:"))
+    throw Error("option --res sets the resolution of a procedural map; " + spec + " is a file");
   const auto [width, height] = args.resolution("res", {1024, 512});
-  const Environment environment =
-      make_environment(args.positionals()[0], environment_options(args), width, height);
-  std::cout << sh_json(environment.sh(args.integer("lmax", 4))).dump() << '\n';
+  const int lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
+  const Environment environment = make_environment(spec, environment_options(args), width, height);
+  std::cout << sh_json(environment.sh(lmax)).dump() << '\n';
   return 0;
 }
 
@@ -148,9 +79,9 @@ int command_env(const std::vector<std::string>& raw) {
     throw Error("usage: glaze env procedural NAME --out FILE.exr [--res WxH]");
   const auto [width, height] = args.resolution("res", {1024, 512});
   const std::string& name = args.positionals()[1];
-  write_image(args.get("out", ""), make_procedural_environment(name, width, height),
+  write_image(args.text("out", ""), make_procedural_environment(name, width, height),
               {{"glaze:environment", "procedural:" + name}});
-  std::cerr << "wrote " << args.get("out", "") << " (" << width << "x" << height << ")\n";
+  std::cerr << "wrote " << args.text("out", "") << " (" << width << "x" << height << ")\n";
   return 0;
 }
 

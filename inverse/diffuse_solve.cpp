@@ -11,6 +11,12 @@ DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<
   if (specular.size() != count || diffuse_basis.size() != count || (!weights.empty() && weights.size() != count))
     throw Error("solve_diffuse_reflectance: sample arrays differ in length");
   const ParameterSpec& bounds = parameter_spec(MaterialParameter::Rd);
+  for (size_t k = 0; k < count; ++k) {
+    if (!observed[k].allFinite() || !specular[k].allFinite() || !diffuse_basis[k].allFinite() ||
+        (!weights.empty() && !(weights[k] >= 0.0f && std::isfinite(weights[k]))))
+      throw Error("solve_diffuse_reflectance: sample " + std::to_string(k) +
+                  " is not finite or has a negative weight; drop such samples before fitting");
+  }
 
   RGBd numerator = RGBd::Zero(), denominator = RGBd::Zero();
   for (size_t k = 0; k < count; ++k) {

@@ -21,7 +21,8 @@ struct DiffuseSolve {
 };
 
 // All spans have one entry per sample; `weights` may be empty (all 1). A channel whose
-// basis is zero in every sample (nothing constrains it) gets Rd = 0.
+// basis is zero in every sample (nothing constrains it) gets Rd = 0. Throws glaze::Error
+// for non-finite samples or negative weights.
 DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<const RGB> specular,
                                        std::span<const RGB> diffuse_basis,
                                        std::span<const float> weights = {});

@@ -15,6 +15,8 @@ Environment::Environment(Image radiance, const EnvironmentOptions& options, std:
     throw Error(source_ + ": environment map is empty");
   if (!std::isfinite(scale_) || scale_ < 0.0f)
     throw Error(source_ + ": environment scale must be finite and >= 0, got " + std::to_string(scale_));
+  if (!std::isfinite(options.rotation_degrees))
+    throw Error(source_ + ": environment rotation must be a finite number of degrees");
   const Mat3& to_world = options.to_world;
   if (!to_world.allFinite() || (to_world.transpose() * to_world - Mat3::Identity()).norm() > 1e-3f ||
       to_world.determinant() <= 0.0f) {

@@ -3,6 +3,9 @@
 #include "renderer/error.h"
 
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include <cmath>
 
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +13,10 @@
 #include <system_error>
 
 namespace glaze {
+
+float srgb_to_linear(float encoded) {
+  return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
 
 Image read_image(const std::string& path) {
   std::error_code ec;
@@ -27,6 +34,11 @@ Image read_image(const std::string& path) {
     throw Error(path + ": image has no pixels (" + std::to_string(spec.width) + "x" +
                 std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) + " channels)");
 
+  constexpr int64_t kMaxPixels = int64_t(1) << 28;  // 16k x 16k: far beyond any map glaze needs
+  if (int64_t(spec.width) * spec.height > kMaxPixels || spec.nchannels > 64)
+    throw Error(path + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
+                std::to_string(spec.nchannels) + " channels, larger than glaze accepts (at most 2^28 pixels); "
+                "is the file corrupt?");
   const int channels = spec.nchannels;
   std::vector<float> raw(size_t(spec.width) * spec.height * channels);
   if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, raw.data())) {
@@ -35,11 +47,22 @@ Image read_image(const std::string& path) {
   }
   input->close();
 
+  // Integer images (PNG, JPEG, 8-bit TIFF, ...) store sRGB-encoded values unless the
+  // file says it is linear; float images (EXR, HDR, PFM) are linear already.
+  const std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
+  const bool integer_format = spec.format.basetype == OIIO::TypeDesc::UINT8 ||
+                              spec.format.basetype == OIIO::TypeDesc::UINT16 ||
+                              spec.format.basetype == OIIO::TypeDesc::INT8 ||
+                              spec.format.basetype == OIIO::TypeDesc::INT16;
+  const bool srgb_encoded = integer_format && !OIIO::Strutil::iequals(color_space, "linear");
+
   Image image(spec.width, spec.height);
   const size_t count = size_t(spec.width) * spec.height;
   for (size_t i = 0; i < count; ++i) {
-    for (int c = 0; c < 3; ++c)
-      image.pixels[i * 3 + c] = raw[i * channels + (channels >= 3 ? c : 0)];
+    for (int c = 0; c < 3; ++c) {
+      const float value = raw[i * channels + (channels >= 3 ? c : 0)];
+      image.pixels[i * 3 + c] = srgb_encoded ? srgb_to_linear(value) : value;
+    }
   }
   return image;
 }

@@ -34,8 +34,12 @@ struct Image {
 };
 
 // Reads `path` as linear RGB (grey is replicated, alpha and extra channels dropped).
-// Throws glaze::Error for a missing, unreadable, truncated or empty image.
+// Integer formats (PNG, JPEG, ...) are decoded from sRGB unless tagged linear.
+// Throws glaze::Error for a missing, unreadable, truncated, empty or absurdly large image.
 Image read_image(const std::string& path);
+
+// The sRGB transfer function's inverse (IEC 61966-2-1), for 8- and 16-bit images.
+float srgb_to_linear(float encoded);
 
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.

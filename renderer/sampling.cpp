@@ -1,6 +1,7 @@
 #include "renderer/sampling.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace glaze {
@@ -25,7 +26,8 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
   for (int i = 0; i < n; ++i) {
     bins_[i].pdf = static_cast<float>(func[i] / integral_);
     const float width = bins_[i + 1].cdf - bins_[i].cdf;
-    bins_[i].inverse_width = width > 0.0f ? 1.0f / width : 0.0f;
+    const float inverse_width = width > 0.0f ? 1.0f / width : 0.0f;
+    bins_[i].inverse_width = std::isfinite(inverse_width) ? inverse_width : 0.0f;  // subnormal widths
   }
   inverse_size_ = 1.0f / n;
   guide_.resize(n);
@@ -49,7 +51,12 @@ float Distribution1D::sample(float u, float* pdf, int* bin) const {
   const float du = std::clamp((u - chosen.cdf) * chosen.inverse_width, 0.0f, 1.0f);
   if (pdf) *pdf = chosen.pdf;
   if (bin) *bin = i;
-  return std::min((i + du) * inverse_size_, 0x1.fffffep-1f);
+  // (i + du) / n can round into the next bin when du is near 1; keep x inside bin i so
+  // that pdf(x) reports the density the sample was drawn with.
+  float x = std::min((i + du) * inverse_size_, 0x1.fffffep-1f);
+  while (x > 0.0f && static_cast<int>(x * n) > i) x = std::nextafter(x, 0.0f);
+  while (static_cast<int>(x * n) < i) x = std::nextafter(x, 1.0f);
+  return x;
 }
 
 float Distribution1D::pdf(float x) const {

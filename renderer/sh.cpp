@@ -87,6 +87,11 @@ double sh_kernel_energy_fraction(int lmax) {
   return kept / total;
 }
 
+ShCoefficients::ShCoefficients(int lmax_) : lmax(lmax_) {
+  detail::check_lmax(lmax);
+  values.assign(sh_count(lmax), RGBd::Zero());
+}
+
 RGB ShCoefficients::eval(const Vec3& d) const {
   RGBd sum = RGBd::Zero();
   for_each_sh(lmax, double(d.x()), double(d.y()), double(d.z()),

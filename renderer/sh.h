@@ -96,7 +96,8 @@ struct ShCoefficients {
   int lmax = 0;
   std::vector<RGBd> values;  // sh_count(lmax), index l(l+1)+m
 
-  explicit ShCoefficients(int lmax_ = 0) : lmax(lmax_), values(sh_count(lmax_), RGBd::Zero()) {}
+  // Throws glaze::Error unless 0 <= lmax <= kShMaxLmax.
+  explicit ShCoefficients(int lmax_ = 0);
   RGBd& operator()(int l, int m) { return values[sh_index(l, m)]; }
   const RGBd& operator()(int l, int m) const { return values[sh_index(l, m)]; }
 

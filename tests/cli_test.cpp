@@ -84,6 +84,11 @@ TEST(Cli, BadInputGivesClearErrors) {
   expect_clear_failure(glaze("sh procedural:office --to-world 2,0,0,0,1,0,0,0,1", dir), "rotation");
   expect_clear_failure(glaze("sh procedural:office --bogus 1", dir), "--bogus");
   expect_clear_failure(glaze("frobnicate", dir), "frobnicate");
+  expect_clear_failure(glaze("sh procedural:office --rotation 1e40", dir), "--rotation");
+  expect_clear_failure(glaze("sh procedural:office --res 99999999999x5", dir), "--res");
+  expect_clear_failure(glaze("sh procedural:office --lmax 2 --lmax 3", dir), "twice");
+  std::ofstream(dir.file("empty.exr"));  // a zero-byte file
+  expect_clear_failure(glaze("sh " + dir.file("empty.exr"), dir), "empty.exr");
   expect_clear_failure(glaze("env procedural office --out " + dir.file("no/such/dir/x.exr"), dir), "x.exr");
 }
 

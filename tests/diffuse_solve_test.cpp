@@ -1,6 +1,7 @@
 // Tests of the inner closed-form solve for Rd (inverse/diffuse_solve.h) on samples made
 // by the renderer's own shading model.
 #include "inverse/diffuse_solve.h"
+#include "renderer/error.h"
 #include "renderer/environment.h"
 #include "renderer/procedural_environment.h"
 #include "renderer/rng.h"
@@ -76,7 +77,11 @@ TEST(DiffuseSolve, UnconstrainedChannelAndBadInput) {
   EXPECT_FLOAT_EQ(solve.Rd[0], 0.4f);
   EXPECT_EQ(solve.Rd[1], 0.0f);  // nothing constrains green
   const std::vector<RGB> two(2, RGB::Zero());
-  EXPECT_ANY_THROW(solve_diffuse_reflectance(observed, two, basis));
+  EXPECT_THROW(solve_diffuse_reflectance(observed, two, basis), Error);
+  const std::vector<RGB> not_finite = {RGB(std::nanf(""), 0.2f, 0.2f)};
+  EXPECT_THROW(solve_diffuse_reflectance(not_finite, specular, basis), Error);
+  const std::vector<float> negative = {-1.0f};
+  EXPECT_THROW(solve_diffuse_reflectance(observed, specular, basis, negative), Error);
 }
 
 }  // namespace

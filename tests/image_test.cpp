@@ -62,6 +62,26 @@ TEST(ImageIo, ReadsHdrAndPfm) {
   }
 }
 
+TEST(ImageIo, EightBitImagesAreDecodedFromSrgb) {
+  testing::TemporaryDirectory dir;
+  Image image(4, 2);
+  std::fill(image.pixels.begin(), image.pixels.end(), 0.5f);  // stored as code value 128
+  write_image(dir.file("grey.png"), image);
+  const Image back = read_image(dir.file("grey.png"));
+  ASSERT_EQ(back.width, 4);
+  // sRGB code 128/255 = 0.50196 decodes to 0.21586 (IEC 61966-2-1).
+  EXPECT_NEAR(back.pixels[0], 0.21586f, 1e-4f);
+  EXPECT_NEAR(srgb_to_linear(0.04045f), 0.04045f / 12.92f, 1e-7f);
+  EXPECT_NEAR(srgb_to_linear(1.0f), 1.0f, 1e-6f);
+}
+
+TEST(ImageIo, AbsurdHeaderIsRejectedBeforeAllocating) {
+  testing::TemporaryDirectory dir;
+  std::ofstream(dir.file("huge.pfm"), std::ios::binary) << "PF\n100000 50000\n-1.0\n";
+  const std::string message = error_of([&] { read_image(dir.file("huge.pfm")); });
+  EXPECT_NE(message.find("huge.pfm"), std::string::npos) << message;
+}
+
 TEST(ImageIo, MissingFileNamesThePath) {
   const std::string message = error_of([] { read_image("/nonexistent/map.exr"); });
   EXPECT_NE(message.find("/nonexistent/map.exr"), std::string::npos);

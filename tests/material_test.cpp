@@ -53,10 +53,23 @@ TEST(Material, WhiteFurnaceByHemisphereQuadrature) {
   }
 }
 
-TEST(Material, EnergyIsNeverCreated) {
-  // The misprinted 21/(20 pi (1 - R0)) factor would exceed 1 here; the model must not.
-  for (float R0 = 0; R0 <= 1.0f; R0 += 0.05f)
-    for (float mu = 0.01f; mu <= 1.0f; mu += 0.07f) EXPECT_LE(PolishedMaterial(R0, RGB::Ones()).albedo(mu)[0], 1.0f + 1e-6f);
+TEST(Material, DoesNotUseThePapersMisprintedDiffuseFactor) {
+  // The paper's 21/(20 pi (1 - R0)) would reflect F + Rd g(mu_o) / (1 - R0) > 1 in the
+  // furnace. Quadrature of eval_diffuse must give 1 and stay clear of that value.
+  const float R0 = 0.5f, mu_o = 0.5f;
+  const PolishedMaterial white(R0, RGB::Ones());
+  const Vec3 wo = direction(mu_o, 0.0f);
+  const int steps = 2000;
+  double integral = 0;
+  for (int t = 0; t < steps; ++t) {
+    const double theta = (t + 0.5) * (kPiD / 2) / steps;
+    integral += white.eval_diffuse(wo, direction(float(std::cos(theta)), 0.0f))[0] * std::cos(theta) *
+                std::sin(theta) * (kPiD / 2 / steps) * 2 * kPiD;
+  }
+  const double F = white.fresnel(mu_o);
+  const double misprint = F + coat_transmittance_g(double(mu_o)) / (1 - R0);
+  EXPECT_NEAR(F + integral, 1.0, 1e-4);
+  EXPECT_GT(misprint, 1.4);
 }
 
 TEST(Material, DiffuseIsReciprocal) {
@@ -188,6 +201,7 @@ TEST(MaterialParameters, RegistryListsBoundsAndConstructorEnforcesThem) {
   EXPECT_THROW(PolishedMaterial(std::nanf(""), RGB::Zero()), Error);
   try {
     PolishedMaterial(0.04f, RGB(0.5f, 2.0f, 0.5f));
+    FAIL() << "Rd = 2 was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("Rd"), std::string::npos);
   }

@@ -1,0 +1,102 @@
+#include "app/arguments.h"
+
+#include "renderer/error.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+namespace glaze {
+namespace {
+
+// Parses the whole of `token` as a finite float, or returns false.
+bool parse_real(const std::string& token, float* value) {
+  if (token.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  const double parsed = std::strtod(token.c_str(), &end);
+  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(parsed) ||
+      std::abs(parsed) > std::numeric_limits<float>::max())
+    return false;
+  *value = static_cast<float>(parsed);
+  return true;
+}
+
+bool parse_integer(const std::string& token, long* value) {
+  if (token.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  const long parsed = std::strtol(token.c_str(), &end, 10);
+  if (end != token.c_str() + token.size() || errno == ERANGE) return false;
+  *value = parsed;
+  return true;
+}
+
+}  // namespace
+
+Arguments::Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed) {
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg.starts_with("--")) {
+      const std::string key = arg.substr(2);
+      if (!allowed.count(key)) throw Error("unknown option --" + key + " (see `glaze help`)");
+      if (i + 1 >= args.size()) throw Error("option --" + key + " needs a value");
+      if (options_.count(key)) throw Error("option --" + key + " is given twice");
+      options_[key] = args[++i];
+    } else {
+      positionals_.push_back(arg);
+    }
+  }
+}
+
+std::string Arguments::text(const std::string& key, const std::string& fallback) const {
+  const auto it = options_.find(key);
+  return it == options_.end() ? fallback : it->second;
+}
+
+float Arguments::real(const std::string& key, float fallback) const {
+  if (!has(key)) return fallback;
+  float value = 0.0f;
+  if (!parse_real(options_.at(key), &value))
+    throw Error("option --" + key + ": '" + options_.at(key) + "' is not a finite number");
+  return value;
+}
+
+long Arguments::integer(const std::string& key, long fallback, long minimum, long maximum) const {
+  if (!has(key)) return fallback;
+  long value = 0;
+  if (!parse_integer(options_.at(key), &value) || value < minimum || value > maximum) {
+    throw Error("option --" + key + ": '" + options_.at(key) + "' is not an integer in [" +
+                std::to_string(minimum) + ", " + std::to_string(maximum) + "]");
+  }
+  return value;
+}
+
+std::pair<int, int> Arguments::resolution(const std::string& key, std::pair<int, int> fallback) const {
+  if (!has(key)) return fallback;
+  const std::string& token = options_.at(key);
+  const size_t x = token.find('x');
+  long width = 0, height = 0;
+  if (x == std::string::npos || !parse_integer(token.substr(0, x), &width) ||
+      !parse_integer(token.substr(x + 1), &height) || width < 1 || height < 1 || width > 65536 || height > 65536)
+    throw Error("option --" + key + ": '" + token + "' is not a resolution like 1024x512 (sides 1 to 65536)");
+  return {static_cast<int>(width), static_cast<int>(height)};
+}
+
+std::vector<float> Arguments::reals(const std::string& key) const {
+  std::vector<float> values;
+  const std::string token = text(key, "");
+  size_t start = 0;
+  while (true) {
+    const size_t comma = token.find(',', start);
+    const std::string item = token.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    float value = 0.0f;
+    if (!parse_real(item, &value)) throw Error("option --" + key + ": '" + item + "' is not a finite number");
+    values.push_back(value);
+    if (comma == std::string::npos) return values;
+    start = comma + 1;
+  }
+}
+
+}  // namespace glaze
