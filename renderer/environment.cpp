@@ -70,38 +70,83 @@ RGB Environment::eval(const Vec3& w) const {
   return scale_ * ((1.0f - fy) * top + fy * bottom);
 }
 
-const Distribution2D& Environment::distribution() const {
-  std::call_once(distribution_once_, [this] {
-    const int width = map_.width, height = map_.height;
-    std::vector<float> texel_luminance(size_t(width) * height);
-    for (int j = 0; j < height; ++j)
-      for (int i = 0; i < width; ++i) texel_luminance[size_t(j) * width + i] = luminance(map_.at(i, j));
-    std::vector<float> weights(size_t(width) * height);
-    for (int j = 0; j < height; ++j) {
-      const float sin_theta = std::sin(kPi * (j + 0.5f) / height);
-      for (int i = 0; i < width; ++i) {
-        float neighbourhood_max = 0.0f;
-        for (int dj = -1; dj <= 1; ++dj) {
-          const int jj = std::clamp(j + dj, 0, height - 1);
-          for (int di = -1; di <= 1; ++di) {
-            const int ii = (i + di + width) % width;
-            neighbourhood_max = std::max(neighbourhood_max, texel_luminance[size_t(jj) * width + ii]);
-          }
+namespace {
+
+// Weights of the sampling distribution: luminance times sin(theta), each texel taking
+// the largest luminance of its 3x3 neighbourhood so that every direction the bilinear
+// lookup lights can be sampled.
+std::vector<float> sampling_weights(const Image& map) {
+  const int width = map.width, height = map.height;
+  std::vector<float> texel_luminance(size_t(width) * height);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) texel_luminance[size_t(j) * width + i] = luminance(map.at(i, j));
+  std::vector<float> weights(size_t(width) * height);
+  for (int j = 0; j < height; ++j) {
+    const float sin_theta = std::sin(kPi * (j + 0.5f) / height);
+    for (int i = 0; i < width; ++i) {
+      float neighbourhood_max = 0.0f;
+      for (int dj = -1; dj <= 1; ++dj) {
+        const int jj = std::clamp(j + dj, 0, height - 1);
+        for (int di = -1; di <= 1; ++di) {
+          const int ii = (i + di + width) % width;
+          neighbourhood_max = std::max(neighbourhood_max, texel_luminance[size_t(jj) * width + ii]);
         }
-        weights[size_t(j) * width + i] = neighbourhood_max * sin_theta;
       }
+      weights[size_t(j) * width + i] = neighbourhood_max * sin_theta;
     }
-    distribution_ = std::make_unique<Distribution2D>(weights, width, height);
-  });
-  return *distribution_;
+  }
+  return weights;
+}
+
+// sin and cos of (start angle + delta) for 0 <= delta <= 0.05, from those of the start:
+// the series below are exact to float rounding there (truncation < 3e-11).
+Eigen::Vector2f rotate_angle(const Eigen::Vector2f& start, float delta) {
+  const float d2 = delta * delta;
+  const float sin_delta = delta * (1.0f - d2 / 6.0f * (1.0f - d2 / 20.0f));
+  const float cos_delta = 1.0f - d2 / 2.0f * (1.0f - d2 / 12.0f);
+  return {start.x() * cos_delta + start.y() * sin_delta, start.y() * cos_delta - start.x() * sin_delta};
+}
+
+}  // namespace
+
+Environment::Sampling::Sampling(const Image& map)
+    : distribution(sampling_weights(map), map.width, map.height),
+      tables_exact(kPi / map.height <= 0.05f && 2.0f * kPi / map.width <= 0.05f),
+      row_start(map.height),
+      column_start(map.width) {
+  for (int j = 0; j < map.height; ++j) {
+    const double theta = kPiD * j / map.height;
+    row_start[j] = Eigen::Vector2f(float(std::sin(theta)), float(std::cos(theta)));
+  }
+  for (int i = 0; i < map.width; ++i) {
+    const double phi = 2.0 * kPiD * i / map.width;
+    column_start[i] = Eigen::Vector2f(float(std::sin(phi)), float(std::cos(phi)));
+  }
+}
+
+const Environment::Sampling& Environment::sampling() const {
+  std::call_once(sampling_once_, [this] { sampling_ = std::make_unique<Sampling>(map_); });
+  return *sampling_;
 }
 
 EnvironmentSample Environment::sample(const Vec2& u) const {
+  const Sampling& tables = sampling();
   float pdf_uv = 0.0f;
-  const Vec2 uv = distribution().sample(u, &pdf_uv);
+  const Vec2 uv = tables.distribution.sample(u, &pdf_uv);
+  if (!(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
+  Vec3 d;
   float sin_theta = 0.0f;
-  const Vec3 d = latlong_to_direction(uv, &sin_theta);
-  if (!(sin_theta > 0.0f) || !(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
+  if (tables.tables_exact) {
+    const float x = uv.x() * map_.width, y = uv.y() * map_.height;
+    const int i = std::min(static_cast<int>(x), map_.width - 1), j = std::min(static_cast<int>(y), map_.height - 1);
+    const Eigen::Vector2f theta = rotate_angle(tables.row_start[j], (y - j) * (kPi / map_.height));
+    const Eigen::Vector2f phi = rotate_angle(tables.column_start[i], (x - i) * (2.0f * kPi / map_.width));
+    sin_theta = theta.x();
+    d = Vec3(sin_theta * phi.x(), theta.y(), -sin_theta * phi.y());
+  } else {
+    d = latlong_to_direction(uv, &sin_theta);
+  }
+  if (!(sin_theta > 0.0f)) return {Vec3::UnitY(), 0.0f};
   // (u, v) -> direction has Jacobian 2 pi^2 sin(theta).
   return {local_to_world_ * d, pdf_uv / (2.0f * kPi * kPi * sin_theta)};
 }
@@ -110,7 +155,7 @@ float Environment::pdf(const Vec3& w) const {
   const Vec3 d = local_to_world_.transpose() * w;
   const float sin_theta = latlong_sin_theta(d);
   if (!(sin_theta > 0.0f)) return 0.0f;
-  return distribution().pdf(direction_to_latlong(d)) / (2.0f * kPi * kPi * sin_theta);
+  return sampling().distribution.pdf(direction_to_latlong(d)) / (2.0f * kPi * kPi * sin_theta);
 }
 
 const ShCoefficients& Environment::sh(int lmax) const {

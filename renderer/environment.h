@@ -63,15 +63,26 @@ class Environment {
   Vec3 uv_to_direction(const Vec2& uv) const;
 
  private:
-  const Distribution2D& distribution() const;
+  // What importance sampling needs, built on first use: the distribution over texels,
+  // and sin/cos of each row's and column's starting angle, so that a sampled direction
+  // costs no trigonometric calls (angle addition with a short series for the offset
+  // inside the texel, exact to float rounding for texels under 0.05 rad).
+  struct Sampling {
+    explicit Sampling(const Image& map);
+    Distribution2D distribution;
+    bool tables_exact;  // texels small enough for the series
+    std::vector<Eigen::Vector2f> row_start;     // (sin, cos) of theta = pi j / H
+    std::vector<Eigen::Vector2f> column_start;  // (sin, cos) of phi = 2 pi i / W
+  };
+  const Sampling& sampling() const;
 
   Image map_;
   float scale_;
   Mat3 local_to_world_;
   std::string source_;
 
-  mutable std::once_flag distribution_once_;
-  mutable std::unique_ptr<Distribution2D> distribution_;
+  mutable std::once_flag sampling_once_;
+  mutable std::unique_ptr<Sampling> sampling_;
   mutable std::mutex sh_mutex_;
   mutable std::map<int, ShCoefficients> sh_cache_;
 };

@@ -22,7 +22,7 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
   integral_ = running[n] / n;
   bins_.resize(n + 1);
   for (int i = 0; i <= n; ++i) bins_[i].cdf = static_cast<float>(running[i] / running[n]);
-  bins_[n] = {1.0f, 0.0f, 0.0f};
+  bins_[n] = {1.0f, 0.0f, 0.0f, n - 1};
   for (int i = 0; i < n; ++i) {
     bins_[i].pdf = static_cast<float>(func[i] / integral_);
     const float width = bins_[i + 1].cdf - bins_[i].cdf;
@@ -30,12 +30,11 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
     bins_[i].inverse_width = std::isfinite(inverse_width) ? inverse_width : 0.0f;  // subnormal widths
   }
   inverse_size_ = 1.0f / n;
-  guide_.resize(n);
   int bin = 0;
   for (int k = 0; k < n; ++k) {
     const float start = static_cast<float>(k) / n;
     while (bin < n - 1 && bins_[bin + 1].cdf <= start) ++bin;
-    guide_[k] = bin;
+    bins_[k].guide = bin;
   }
 }
 
@@ -43,7 +42,7 @@ float Distribution1D::sample(float u, float* pdf, int* bin) const {
   const int n = size();
   // The bin i with cdf_i <= u < cdf_i+1 (so of non-zero width): start from the guide
   // entry, at or before it, and walk forward.
-  int i = guide_[std::clamp(static_cast<int>(u * n), 0, n - 1)];
+  int i = bins_[std::clamp(static_cast<int>(u * n), 0, n - 1)].guide;
   while (i < n - 1 && bins_[i + 1].cdf <= u) ++i;
   while (i > 0 && bins_[i].cdf > u) --i;        // u * n may round up onto the next guide entry
   while (i > 0 && bins_[i].pdf == 0.0f) --i;    // only reachable for u rounding onto 1
