@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
@@ -18,34 +19,25 @@ float srgb_to_linear(float encoded) {
   return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
 }
 
-Image read_image(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw Error(path + ": no such file (check the path; environment maps are lat-long EXR, HDR or PFM images)");
-  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
+namespace {
 
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) {
-    throw Error(path + ": cannot be read as an image (" + OIIO::geterror() +
-                "); expected a float image such as EXR, HDR or PFM");
-  }
-  const OIIO::ImageSpec& spec = input->spec();
+// Reads an opened image as linear RGB; `name` is used in messages.
+Image decode(OIIO::ImageInput& input, const std::string& name) {
+  const OIIO::ImageSpec& spec = input.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-    throw Error(path + ": image has no pixels (" + std::to_string(spec.width) + "x" +
+    throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" +
                 std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) + " channels)");
-
   constexpr int64_t kMaxPixels = int64_t(1) << 28;  // 16k x 16k: far beyond any map glaze needs
   if (int64_t(spec.width) * spec.height > kMaxPixels || spec.nchannels > 64)
-    throw Error(path + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
+    throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
                 std::to_string(spec.nchannels) + " channels, larger than glaze accepts (at most 2^28 pixels); "
                 "is the file corrupt?");
   const int channels = spec.nchannels;
   std::vector<float> raw(size_t(spec.width) * spec.height * channels);
-  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, raw.data())) {
-    throw Error(path + ": pixel data could not be read, the file is probably truncated or corrupt (" +
-                input->geterror() + ")");
+  if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, raw.data())) {
+    throw Error(name + ": pixel data could not be read, the file is probably truncated or corrupt (" +
+                input.geterror() + ")");
   }
-  input->close();
 
   // Integer images (PNG, JPEG, 8-bit TIFF, ...) store sRGB-encoded values unless the
   // file says it is linear; float images (EXR, HDR, PFM) are linear already.
@@ -65,6 +57,30 @@ Image read_image(const std::string& path) {
     }
   }
   return image;
+}
+
+}  // namespace
+
+Image read_image(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw Error(path + ": no such file (check the path; environment maps are lat-long EXR, HDR or PFM images)");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) {
+    throw Error(path + ": cannot be read as an image (" + OIIO::geterror() +
+                "); expected a float image such as EXR, HDR or PFM");
+  }
+  return decode(*input, path);
+}
+
+Image read_image_from_memory(const unsigned char* bytes, size_t size, const std::string& name) {
+  OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(bytes), size);
+  OIIO::ImageSpec config;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &reader);
+  auto input = OIIO::ImageInput::open(name, &config);
+  if (!input) throw Error(name + ": cannot be decoded as an image (" + OIIO::geterror() + ")");
+  return decode(*input, name);
 }
 
 void write_image(const std::string& path, const Image& image,

@@ -38,6 +38,10 @@ struct Image {
 // Throws glaze::Error for a missing, unreadable, truncated, empty or absurdly large image.
 Image read_image(const std::string& path);
 
+// The same for an image held in memory (a glTF data URI or .glb chunk); `name` picks
+// the format by its extension and appears in messages.
+Image read_image_from_memory(const unsigned char* bytes, size_t size, const std::string& name);
+
 // The sRGB transfer function's inverse (IEC 61966-2-1), for 8- and 16-bit images.
 float srgb_to_linear(float encoded);
 

@@ -1,0 +1,432 @@
+// gltf_loader.cpp: glTF 2.0 (.gltf, .glb) -> Scene, with tinygltf (DESIGN §4).
+//
+// Every index the file contains is checked before it is followed, so that a malformed
+// file gives a glaze::Error naming the element at fault instead of undefined behaviour.
+// Images are decoded by OpenImageIO (tinygltf's own decoder is bypassed) so that EXR
+// textures work and 8-bit ones are linearised from sRGB like every other image in glaze.
+#include "renderer/error.h"
+#include "renderer/scene.h"
+
+#include <tiny_gltf.h>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <set>
+
+namespace glaze {
+namespace {
+
+using tinygltf::Value;
+
+class GltfLoader {
+ public:
+  explicit GltfLoader(const std::string& path) : path_(path) {}
+
+  Scene load() {
+    read_model();
+    scene_.path = path_;
+    load_materials();
+    const int scene_index = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+    if (model_.scenes.empty()) {
+      // A file without scenes: every root node is part of the scene.
+      std::set<int> children;
+      for (const auto& node : model_.nodes) children.insert(node.children.begin(), node.children.end());
+      for (int i = 0; i < static_cast<int>(model_.nodes.size()); ++i)
+        if (!children.count(i)) visit_node(i, Eigen::Affine3f::Identity());
+    } else {
+      if (scene_index >= static_cast<int>(model_.scenes.size())) fail("defaultScene " + std::to_string(scene_index) + " does not exist");
+      const tinygltf::Scene& scene = model_.scenes[scene_index];
+      for (int node : scene.nodes) visit_node(node, Eigen::Affine3f::Identity());
+      read_scene_extras(scene.extras);
+    }
+    if (scene_.meshes.empty() && scene_.spheres.empty()) fail("the scene contains no geometry (no mesh and no glaze sphere)");
+    return std::move(scene_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw Error(path_ + ": " + what); }
+
+  std::filesystem::path directory() const { return std::filesystem::path(path_).parent_path(); }
+
+  void read_model() {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path_, ec))
+      throw Error(path_ + ": no such scene file (expected a .gltf or .glb glTF 2.0 file)");
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(&GltfLoader::decode_image, this);
+    std::string error, warning;
+    const bool binary = path_.size() >= 4 && path_.compare(path_.size() - 4, 4, ".glb") == 0;
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model_, &error, &warning, path_)
+                           : loader.LoadASCIIFromFile(&model_, &error, &warning, path_);
+    if (!warning.empty()) warn(path_ + ": " + warning);
+    if (!ok) fail("cannot be loaded as glTF 2.0: " + (error.empty() ? std::string("unknown error") : error));
+  }
+
+  // tinygltf hands every image's bytes here (external file, data URI or .glb chunk).
+  static bool decode_image(tinygltf::Image* image, const int index, std::string* error, std::string*, int, int,
+                           const unsigned char* bytes, int size, void* self_pointer) {
+    auto* self = static_cast<GltfLoader*>(self_pointer);
+    std::string hint = image->uri;
+    if (hint.empty() || hint.starts_with("data:")) {
+      hint = image->mimeType == "image/jpeg" ? "image.jpg" : image->mimeType == "image/png" ? "image.png" : "image.exr";
+    }
+    try {
+      self->decoded_[index] = read_image_from_memory(bytes, static_cast<size_t>(size), hint);
+    } catch (const Error& e) {
+      if (error) *error = std::string("image ") + std::to_string(index) + ": " + e.what();
+      return false;
+    }
+    return true;
+  }
+
+  static const Value* member(const Value& object, const char* key) {
+    return object.IsObject() && object.Has(key) ? &object.Get(key) : nullptr;
+  }
+
+  double number(const Value& value, const std::string& what) const {
+    if (!value.IsNumber()) fail(what + " must be a number");
+    const double n = value.GetNumberAsDouble();
+    if (!std::isfinite(n)) fail(what + " must be finite");
+    return n;
+  }
+
+  RGB rgb(const Value& value, const std::string& what) const {
+    if (!value.IsArray() || value.ArrayLen() != 3) fail(what + " must be an array of 3 numbers");
+    return {float(number(value.Get(0), what)), float(number(value.Get(1), what)), float(number(value.Get(2), what))};
+  }
+
+  void load_materials() {
+    for (size_t i = 0; i < model_.materials.size(); ++i) {
+      const tinygltf::Material& source = model_.materials[i];
+      const std::string what = "material " + std::to_string(i) + (source.name.empty() ? "" : " '" + source.name + "'");
+      SceneMaterial material;
+      material.name = source.name.empty() ? "material_" + std::to_string(i) : source.name;
+      const auto& pbr = source.pbrMetallicRoughness;
+      if (pbr.baseColorFactor.size() >= 3)
+        material.Rd = RGB(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+      if (pbr.baseColorTexture.index >= 0) material.texture = texture(pbr.baseColorTexture.index, what);
+      if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor > 0.0) {
+        warn(path_ + ": " + what + " has metallicFactor " + std::to_string(pbr.metallicFactor) + " and roughnessFactor " +
+             std::to_string(pbr.roughnessFactor) + "; glaze's coat is a perfect dielectric mirror over a diffuse base, "
+             "so both are ignored (set them to 0 to silence this)");
+      }
+      if (const auto it = source.extensions.find("KHR_materials_ior"); it != source.extensions.end()) {
+        if (const Value* ior_value = member(it->second, "ior")) {
+          const double ior = number(*ior_value, what + " KHR_materials_ior.ior");
+          if (ior < 1.0) fail(what + ": ior " + std::to_string(ior) + " must be >= 1");
+          material.R0 = static_cast<float>(std::pow((ior - 1.0) / (ior + 1.0), 2.0));
+        }
+      }
+      if (const Value* glaze = member(source.extras, "glaze")) {
+        if (const Value* R0 = member(*glaze, "R0")) material.R0 = float(number(*R0, what + " extras.glaze.R0"));
+        if (const Value* Rd = member(*glaze, "Rd")) material.Rd = rgb(*Rd, what + " extras.glaze.Rd");
+      }
+      try {
+        PolishedMaterial(material.R0, material.Rd.min(1.0f));  // validates R0 and the sign of Rd
+      } catch (const Error& e) {
+        fail(what + ": " + e.what());
+      }
+      if ((material.Rd > 1.0f).any()) fail(what + ": Rd (base colour) must be in [0, 1]");
+      scene_.materials.push_back(material);
+    }
+  }
+
+  int texture(int index, const std::string& what) {
+    if (index < 0 || index >= static_cast<int>(model_.textures.size()))
+      fail(what + ": baseColorTexture index " + std::to_string(index) + " does not exist");
+    const int source = model_.textures[index].source;
+    if (source < 0 || source >= static_cast<int>(model_.images.size()))
+      fail(what + ": texture " + std::to_string(index) + " has no image (source " + std::to_string(source) + ")");
+    if (const auto it = texture_of_image_.find(source); it != texture_of_image_.end()) return it->second;
+    const auto decoded = decoded_.find(source);
+    if (decoded == decoded_.end()) fail(what + ": image " + std::to_string(source) + " could not be read");
+    Texture texture{model_.images[source].uri.empty() ? "image " + std::to_string(source) : model_.images[source].uri,
+                    decoded->second};
+    size_t clamped = 0;
+    for (float& v : texture.image.pixels) {
+      if (!(v >= 0.0f && v <= 1.0f)) {
+        v = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+        ++clamped;
+      }
+    }
+    if (clamped) warn(path_ + ": texture " + texture.source + ": " + std::to_string(clamped) +
+                      " values outside [0, 1] clamped (Rd is a reflectance)");
+    scene_.textures.push_back(std::move(texture));
+    return texture_of_image_[source] = static_cast<int>(scene_.textures.size()) - 1;
+  }
+
+  Eigen::Affine3f local_transform(const tinygltf::Node& node, const std::string& what) const {
+    Eigen::Affine3f transform = Eigen::Affine3f::Identity();
+    if (node.matrix.size() == 16) {
+      Eigen::Matrix4f m;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) m(r, c) = float(node.matrix[c * 4 + r]);  // column-major
+      transform.matrix() = m;
+      return transform;
+    }
+    if (!node.matrix.empty()) fail(what + ": matrix must have 16 numbers");
+    if (node.translation.size() == 3)
+      transform.translate(Vec3(float(node.translation[0]), float(node.translation[1]), float(node.translation[2])));
+    if (node.rotation.size() == 4) {
+      const Eigen::Quaternionf q(float(node.rotation[3]), float(node.rotation[0]), float(node.rotation[1]),
+                                 float(node.rotation[2]));
+      if (q.norm() < 1e-6f) fail(what + ": rotation quaternion is zero");
+      transform.rotate(q.normalized());
+    }
+    if (node.scale.size() == 3) transform.scale(Vec3(float(node.scale[0]), float(node.scale[1]), float(node.scale[2])));
+    return transform;
+  }
+
+  void visit_node(int index, const Eigen::Affine3f& parent) {
+    if (index < 0 || index >= static_cast<int>(model_.nodes.size())) fail("node index " + std::to_string(index) + " does not exist");
+    if (!on_path_.insert(index).second)
+      fail("node " + std::to_string(index) + " is its own ancestor (the node hierarchy has a cycle)");
+    const tinygltf::Node& node = model_.nodes[index];
+    const std::string what = "node " + std::to_string(index) + (node.name.empty() ? "" : " '" + node.name + "'");
+    const Eigen::Affine3f world = parent * local_transform(node, what);
+    if (!world.matrix().allFinite()) fail(what + ": transform is not finite");
+
+    if (node.mesh >= 0) add_mesh(node.mesh, world, what);
+    if (node.camera >= 0) add_camera(node.camera, world, what);
+    if (const Value* glaze = member(node.extras, "glaze"))
+      if (const Value* sphere = member(*glaze, "sphere")) add_sphere(*sphere, world, what);
+    for (int child : node.children) visit_node(child, world);
+    on_path_.erase(index);
+  }
+
+  void add_camera(int index, const Eigen::Affine3f& world, const std::string& what) {
+    if (index >= static_cast<int>(model_.cameras.size())) fail(what + ": camera " + std::to_string(index) + " does not exist");
+    const tinygltf::Camera& camera = model_.cameras[index];
+    if (camera.type != "perspective") fail(what + ": camera type '" + camera.type + "' is not supported (only perspective)");
+    // Keep the rigid part of the pose: scale in the hierarchy must not skew the rays.
+    Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+    pose.linear() = world.rotation();
+    pose.translation() = world.translation();
+    std::string name = camera.name.empty() ? "camera_" + std::to_string(index) : camera.name;
+    for (const CameraSpec& existing : scene_.cameras)
+      if (existing.name == name) name += "_" + std::to_string(scene_.cameras.size());
+    scene_.cameras.push_back({name, pose, float(camera.perspective.yfov), float(camera.perspective.aspectRatio)});
+  }
+
+  void add_sphere(const Value& sphere, const Eigen::Affine3f& world, const std::string& what) {
+    const Value* radius = member(sphere, "radius");
+    const Value* material = member(sphere, "material");
+    if (!radius) fail(what + ": extras.glaze.sphere needs a radius");
+    const float r = float(number(*radius, what + " sphere radius"));
+    // The node's scale multiplies the radius; it must be uniform for a sphere to stay one.
+    const Eigen::Matrix3f linear = world.linear();
+    const float s0 = linear.col(0).norm(), s1 = linear.col(1).norm(), s2 = linear.col(2).norm();
+    if (std::abs(s0 - s1) > 1e-4f * s0 || std::abs(s0 - s2) > 1e-4f * s0)
+      fail(what + ": a glaze sphere's node must not be scaled non-uniformly");
+    if (!(r * s0 > 0.0f)) fail(what + ": sphere radius must be positive");
+    const int material_number = material ? int(number(*material, what + " sphere material")) : -1;
+    scene_.spheres.push_back({what, world.translation(), r * s0, material_index(material_number, what), world.rotation()});
+  }
+
+  int material_index(int index, const std::string& what) {
+    if (index < 0) {  // glTF's default material: white base, our default coat
+      if (default_material_ < 0) {
+        scene_.materials.push_back(SceneMaterial{"default", 0.04f, RGB::Ones(), -1});
+        default_material_ = static_cast<int>(scene_.materials.size()) - 1;
+      }
+      return default_material_;
+    }
+    if (index >= static_cast<int>(model_.materials.size()))
+      fail(what + ": material " + std::to_string(index) + " does not exist");
+    return index;
+  }
+
+  // Reads accessor `index` as `components` floats per element (normalised integers are
+  // converted), checking every bound on the way.
+  std::vector<float> read_floats(int index, int components, const std::string& what) const {
+    const tinygltf::Accessor& accessor = accessor_at(index, what);
+    if (tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type)) != components)
+      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (expected " + std::to_string(components) + " components)");
+    std::vector<float> values(accessor.count * components);
+    for_each_component(accessor, what, [&](size_t element, int component, const unsigned char* p) {
+      float v = 0.0f;
+      switch (accessor.componentType) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *p / 255.0f; break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, p, 2); v = s / 65535.0f; break; }
+        default: fail(what + ": accessor " + std::to_string(index) + " has an unsupported component type");
+      }
+      if (!std::isfinite(v)) fail(what + ": accessor " + std::to_string(index) + " contains a non-finite value");
+      values[element * components + component] = v;
+    });
+    return values;
+  }
+
+  std::vector<uint32_t> read_indices(int index, const std::string& what) const {
+    const tinygltf::Accessor& accessor = accessor_at(index, what);
+    if (accessor.type != TINYGLTF_TYPE_SCALAR) fail(what + ": index accessor must be SCALAR");
+    std::vector<uint32_t> indices(accessor.count);
+    for_each_component(accessor, what, [&](size_t element, int, const unsigned char* p) {
+      switch (accessor.componentType) {
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: indices[element] = *p; break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, p, 2); indices[element] = s; break; }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&indices[element], p, 4); break;
+        default: fail(what + ": index accessor has an unsupported component type");
+      }
+    });
+    return indices;
+  }
+
+  const tinygltf::Accessor& accessor_at(int index, const std::string& what) const {
+    if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
+      fail(what + ": accessor " + std::to_string(index) + " does not exist");
+    const tinygltf::Accessor& accessor = model_.accessors[index];
+    if (accessor.sparse.isSparse) fail(what + ": sparse accessors are not supported");
+    return accessor;
+  }
+
+  void for_each_component(const tinygltf::Accessor& accessor, const std::string& what,
+                          const std::function<void(size_t, int, const unsigned char*)>& visit) const {
+    if (accessor.bufferView < 0 || accessor.bufferView >= static_cast<int>(model_.bufferViews.size()))
+      fail(what + ": accessor refers to bufferView " + std::to_string(accessor.bufferView) + ", which does not exist");
+    const tinygltf::BufferView& view = model_.bufferViews[accessor.bufferView];
+    if (view.buffer < 0 || view.buffer >= static_cast<int>(model_.buffers.size()))
+      fail(what + ": bufferView " + std::to_string(accessor.bufferView) + " refers to buffer " + std::to_string(view.buffer) + ", which does not exist");
+    const std::vector<unsigned char>& data = model_.buffers[view.buffer].data;
+    const int stride = accessor.ByteStride(view);
+    const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(accessor.componentType));
+    const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
+    if (stride <= 0 || component_size <= 0 || components <= 0) fail(what + ": accessor has an invalid layout");
+    const size_t element_size = size_t(component_size) * components;
+    if (accessor.count > 0) {
+      const size_t last = view.byteOffset + accessor.byteOffset + (accessor.count - 1) * size_t(stride) + element_size;
+      if (last > view.byteOffset + view.byteLength || view.byteOffset + view.byteLength > data.size())
+        fail(what + ": accessor reads past the end of buffer " + std::to_string(view.buffer) + " (" +
+             std::to_string(data.size()) + " bytes; is the .bin file missing or truncated?)");
+    }
+    const unsigned char* base = data.data() + view.byteOffset + accessor.byteOffset;
+    for (size_t e = 0; e < accessor.count; ++e)
+      for (int c = 0; c < components; ++c) visit(e, c, base + e * size_t(stride) + size_t(c) * component_size);
+  }
+
+  void add_mesh(int index, const Eigen::Affine3f& world, const std::string& node_what) {
+    if (index >= static_cast<int>(model_.meshes.size())) fail(node_what + ": mesh " + std::to_string(index) + " does not exist");
+    const tinygltf::Mesh& mesh = model_.meshes[index];
+    const Eigen::Matrix3f normal_matrix = world.linear().inverse().transpose();
+    if (!normal_matrix.allFinite()) fail(node_what + ": transform is singular");
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      const tinygltf::Primitive& primitive = mesh.primitives[p];
+      const std::string what = "mesh " + std::to_string(index) + (mesh.name.empty() ? "" : " '" + mesh.name + "'") +
+                               " primitive " + std::to_string(p);
+      if (primitive.mode != TINYGLTF_MODE_TRIANGLES) {
+        warn(path_ + ": " + what + " is not a triangle list (mode " + std::to_string(primitive.mode) + "); skipped");
+        continue;
+      }
+      const auto position = primitive.attributes.find("POSITION");
+      if (position == primitive.attributes.end()) fail(what + " has no POSITION attribute");
+      TriangleMesh out;
+      out.name = what;
+      out.material = material_index(primitive.material, what);
+      const std::vector<float> positions = read_floats(position->second, 3, what + " POSITION");
+      const size_t vertex_count = positions.size() / 3;
+      for (size_t v = 0; v < vertex_count; ++v)
+        out.positions.push_back(world * Vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]));
+      std::vector<uint32_t> indices;
+      if (primitive.indices >= 0) {
+        indices = read_indices(primitive.indices, what + " indices");
+      } else {
+        for (uint32_t v = 0; v < vertex_count; ++v) indices.push_back(v);
+      }
+      if (indices.size() % 3 != 0) fail(what + ": index count " + std::to_string(indices.size()) + " is not a multiple of 3");
+      for (size_t t = 0; t < indices.size(); t += 3) {
+        for (int k = 0; k < 3; ++k)
+          if (indices[t + k] >= vertex_count)
+            fail(what + ": index " + std::to_string(indices[t + k]) + " is out of range (" + std::to_string(vertex_count) + " vertices)");
+        out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
+      }
+      if (const auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
+        const std::vector<float> normals = read_floats(normal->second, 3, what + " NORMAL");
+        if (normals.size() != positions.size()) fail(what + ": NORMAL and POSITION counts differ");
+        for (size_t v = 0; v < vertex_count; ++v) {
+          const Vec3 n = normal_matrix * Vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+          out.normals.push_back(n.norm() > 0.0f ? n.normalized() : Vec3(0, 1, 0));
+        }
+      } else {
+        generate_smooth_normals(out);
+      }
+      if (const auto uv = primitive.attributes.find("TEXCOORD_0"); uv != primitive.attributes.end()) {
+        const std::vector<float> uvs = read_floats(uv->second, 2, what + " TEXCOORD_0");
+        if (uvs.size() / 2 != vertex_count) fail(what + ": TEXCOORD_0 and POSITION counts differ");
+        for (size_t v = 0; v < vertex_count; ++v) out.uvs.push_back(Vec2(uvs[2 * v], uvs[2 * v + 1]));
+      }
+      if (scene_.materials[out.material].texture >= 0 && out.uvs.empty())
+        fail(what + ": its material has a texture but the primitive has no TEXCOORD_0");
+      if (!out.triangles.empty()) scene_.meshes.push_back(std::move(out));
+    }
+  }
+
+  // Area-weighted average of the faces around each vertex (glTF says flat shading when
+  // normals are absent; smooth normals are what a polished surface is meant to have).
+  static void generate_smooth_normals(TriangleMesh& mesh) {
+    mesh.normals.assign(mesh.positions.size(), Vec3::Zero());
+    for (const auto& t : mesh.triangles) {
+      const Vec3 face = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      for (uint32_t v : t) mesh.normals[v] += face;  // |face| = twice the area
+    }
+    for (Vec3& n : mesh.normals) n = n.norm() > 0.0f ? n.normalized() : Vec3(0, 1, 0);
+  }
+
+  void read_scene_extras(const Value& extras) {
+    const Value* glaze = member(extras, "glaze");
+    if (!glaze) return;
+    if (const Value* film = member(*glaze, "film")) {
+      const Value* w = member(*film, "width");
+      const Value* h = member(*film, "height");
+      if (!w || !h) fail("scene extras.glaze.film needs width and height");
+      const double width = number(*w, "film width"), height = number(*h, "film height");
+      if (width < 1 || height < 1 || width > 65536 || height > 65536 || width != std::floor(width) || height != std::floor(height))
+        fail("scene extras.glaze.film must be whole numbers of pixels in [1, 65536]");
+      scene_.film = std::pair{int(width), int(height)};
+    }
+    if (const Value* environment = member(*glaze, "environment")) {
+      EnvironmentSpec spec;
+      if (const Value* file = member(*environment, "file")) {
+        if (!file->IsString()) fail("scene extras.glaze.environment.file must be a string");
+        const std::filesystem::path file_path = file->Get<std::string>();
+        spec.source = file_path.is_absolute() ? file_path.string() : (directory() / file_path).string();
+      } else if (const Value* procedural = member(*environment, "procedural")) {
+        if (!procedural->IsString()) fail("scene extras.glaze.environment.procedural must be a string");
+        spec.source = "procedural:" + procedural->Get<std::string>();
+        if (const Value* w = member(*environment, "width")) spec.width = int(number(*w, "environment width"));
+        if (const Value* h = member(*environment, "height")) spec.height = int(number(*h, "environment height"));
+      } else {
+        fail("scene extras.glaze.environment needs \"file\" or \"procedural\"");
+      }
+      if (const Value* scale = member(*environment, "scale")) spec.options.scale = float(number(*scale, "environment scale"));
+      if (const Value* rotation = member(*environment, "rotation"))
+        spec.options.rotation_degrees = float(number(*rotation, "environment rotation"));
+      if (const Value* to_world = member(*environment, "to_world")) {
+        if (!to_world->IsArray() || to_world->ArrayLen() != 3) fail("environment to_world must be a 3x3 array of rows");
+        for (int r = 0; r < 3; ++r) {
+          const Value& row = to_world->Get(r);
+          if (!row.IsArray() || row.ArrayLen() != 3) fail("environment to_world must be a 3x3 array of rows");
+          for (int c = 0; c < 3; ++c) spec.options.to_world(r, c) = float(number(row.Get(c), "environment to_world"));
+        }
+      }
+      scene_.environment = spec;
+    }
+  }
+
+  std::string path_;
+  tinygltf::Model model_;
+  Scene scene_;
+  std::map<int, Image> decoded_;
+  std::map<int, int> texture_of_image_;
+  std::set<int> on_path_;
+  int default_material_ = -1;
+};
+
+}  // namespace
+
+Scene load_scene(const std::string& path) { return GltfLoader(path).load(); }
+
+}  // namespace glaze

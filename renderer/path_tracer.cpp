@@ -1,0 +1,99 @@
+#include "renderer/path_tracer.h"
+
+#include "renderer/error.h"
+
+namespace glaze {
+namespace {
+
+float power_heuristic(float pdf_a, float pdf_b) {
+  const float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+  return a + b > 0.0f ? a / (a + b) : 0.0f;
+}
+
+}  // namespace
+
+DirectLightEstimator parse_direct_light_estimator(const std::string& name) {
+  if (name == "mis") return DirectLightEstimator::mis;
+  if (name == "bsdf") return DirectLightEstimator::bsdf;
+  if (name == "environment") return DirectLightEstimator::environment;
+  throw Error("unknown direct-light estimator '" + name + "' (known: mis, bsdf, environment)");
+}
+
+PathTracer::PathTracer(const Scene& scene, const RayTracer& tracer, const Environment& environment,
+                       const PathTracerOptions& options)
+    : scene_(scene),
+      tracer_(tracer),
+      environment_(environment),
+      options_(options),
+      convex_(scene.is_single_convex_object()),
+      max_depth_(convex_ ? std::min(options.max_depth, 1) : options.max_depth) {
+  if (options.max_depth < 1) throw Error("max depth must be at least 1");
+}
+
+RGB PathTracer::radiance(const Ray& camera_ray, Pcg32& rng) const {
+  RGB result = RGB::Zero(), throughput = RGB::Ones();
+  Ray ray = camera_ray;
+  bool after_delta = true;     // the last bounce was the mirror (or there was none)
+  float last_bsdf_pdf = 0.0f;  // solid-angle density of the last diffuse-lobe sample
+  const bool use_environment_samples = options_.estimator != DirectLightEstimator::bsdf;
+
+  for (int bounce = 0;; ++bounce) {
+    // A convex object cannot see itself: after the first hit every ray escapes.
+    const std::optional<SurfaceHit> hit =
+        (convex_ && bounce > 0) ? std::nullopt : tracer_.intersect(ray);
+    if (!hit) {
+      if (bounce == 0) {
+        if (!options_.black_background) result += environment_.eval(ray.direction);
+      } else {
+        float weight = 1.0f;
+        if (!after_delta) {
+          if (options_.estimator == DirectLightEstimator::environment) weight = 0.0f;
+          else if (options_.estimator == DirectLightEstimator::mis)
+            weight = power_heuristic(last_bsdf_pdf, environment_.pdf(ray.direction));
+        }
+        if (weight > 0.0f) result += throughput * environment_.eval(ray.direction) * weight;
+      }
+      break;
+    }
+    if (bounce >= max_depth_) break;
+
+    const Frame frame = Frame::from_normal(hit->normal);
+    const Vec3 wo = frame.to_local(-ray.direction);
+    const PolishedMaterial material = scene_.material_at(hit->material, hit->uv);
+    const Vec3 origin = hit->position + tracer_.ray_epsilon() * hit->geometric_normal;
+
+    if (use_environment_samples) {
+      const EnvironmentSample light = environment_.sample(Vec2(rng.next_float(), rng.next_float()));
+      if (light.pdf > 0.0f && light.direction.dot(hit->geometric_normal) > 0.0f) {
+        const Vec3 wi = frame.to_local(light.direction);
+        const RGB f = material.eval_diffuse(wo, wi);
+        if ((f > 0.0f).any() && (convex_ || !tracer_.occluded({origin, light.direction}))) {
+          const float weight = options_.estimator == DirectLightEstimator::mis
+                                   ? power_heuristic(light.pdf, material.pdf_diffuse(wo, wi))
+                                   : 1.0f;
+          result += throughput * f * (wi.z() * weight / light.pdf) * environment_.eval(light.direction);
+        }
+      }
+    }
+
+    const float u_lobe = rng.next_float();
+    const Vec2 u(rng.next_float(), rng.next_float());
+    const std::optional<MaterialSample> sample = material.sample(wo, u_lobe, u);
+    if (!sample) break;
+    const Vec3 direction = frame.to_world(sample->wi);
+    if (direction.dot(hit->geometric_normal) <= 0.0f) break;  // shading normal sent it inside
+    throughput *= sample->weight;
+    after_delta = sample->is_specular;
+    last_bsdf_pdf = sample->pdf;
+    ray = {origin, direction.normalized()};
+
+    if (bounce + 1 >= options_.russian_roulette_depth) {
+      const float survive = std::min(0.95f, throughput.maxCoeff());
+      if (!(rng.next_float() < survive)) break;
+      throughput /= survive;
+    }
+  }
+  return result;
+}
+
+}  // namespace glaze

@@ -1,0 +1,188 @@
+#include "renderer/ray_tracer.h"
+
+#include "renderer/error.h"
+#include "renderer/latlong.h"
+
+#include <cmath>
+#include <string>
+
+namespace glaze {
+namespace {
+
+void check_device(RTCDevice device, const char* what) {
+  const RTCError error = rtcGetDeviceError(device);
+  if (error != RTC_ERROR_NONE) throw Error(std::string("Embree failed to ") + what + " (error " + std::to_string(int(error)) + ")");
+}
+
+// Nearest root t > t_min of |o + t d - c| = r, in double; NaN if none.
+double intersect_sphere(const Sphere& sphere, const Vec3& origin, const Vec3& direction, double t_min, double t_max) {
+  const Vec3d oc = (origin - sphere.center).cast<double>();
+  const Vec3d d = direction.cast<double>();
+  const double a = d.squaredNorm(), half_b = oc.dot(d);
+  const double c = oc.squaredNorm() - double(sphere.radius) * sphere.radius;
+  const double discriminant = half_b * half_b - a * c;
+  if (discriminant < 0.0) return std::nan("");
+  // Numerically stable roots (no cancellation between -b and sqrt(disc)).
+  const double q = -(half_b + std::copysign(std::sqrt(discriminant), half_b));
+  double t0 = q / a, t1 = q != 0.0 ? c / q : t0;
+  if (t0 > t1) std::swap(t0, t1);
+  if (t0 > t_min && t0 < t_max) return t0;
+  if (t1 > t_min && t1 < t_max) return t1;
+  return std::nan("");
+}
+
+void sphere_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
+  const Sphere& s = (*spheres)[args->primID];
+  const float r = s.radius * (1.0f + 1e-5f);
+  *args->bounds_o = RTCBounds{s.center.x() - r, s.center.y() - r, s.center.z() - r, 0.0f,
+                              s.center.x() + r, s.center.y() + r, s.center.z() + r, 0.0f};
+}
+
+void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
+  if (!args->valid[0]) return;
+  const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
+  const Sphere& s = (*spheres)[args->primID];
+  auto* rayhit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1 only
+  RTCRay& ray = rayhit->ray;
+  const Vec3 origin(ray.org_x, ray.org_y, ray.org_z), direction(ray.dir_x, ray.dir_y, ray.dir_z);
+  const double t = intersect_sphere(s, origin, direction, ray.tnear, ray.tfar);
+  if (std::isnan(t)) return;
+  ray.tfar = static_cast<float>(t);
+  const Vec3 n = (origin.cast<double>() + t * direction.cast<double>() - s.center.cast<double>()).cast<float>();
+  rayhit->hit.Ng_x = n.x();
+  rayhit->hit.Ng_y = n.y();
+  rayhit->hit.Ng_z = n.z();
+  rayhit->hit.u = rayhit->hit.v = 0.0f;
+  rayhit->hit.primID = args->primID;
+  rayhit->hit.geomID = args->geomID;
+  rayhit->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
+  if (!args->valid[0]) return;
+  const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
+  auto* ray = reinterpret_cast<RTCRay*>(args->ray);
+  const Vec3 origin(ray->org_x, ray->org_y, ray->org_z), direction(ray->dir_x, ray->dir_y, ray->dir_z);
+  if (!std::isnan(intersect_sphere((*spheres)[args->primID], origin, direction, ray->tnear, ray->tfar)))
+    ray->tfar = -std::numeric_limits<float>::infinity();
+}
+
+}  // namespace
+
+RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) throw Error("Embree device could not be created");
+  rtc_scene_ = rtcNewScene(device_);
+  rtcSetSceneFlags(rtc_scene_, RTC_SCENE_FLAG_ROBUST);
+
+  Eigen::AlignedBox3f box;
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    const TriangleMesh& mesh = scene.meshes[m];
+    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), mesh.positions.size()));
+    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(uint32_t), mesh.triangles.size()));
+    check_device(device_, "allocate a triangle mesh");
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+      for (int k = 0; k < 3; ++k) vertices[3 * v + k] = mesh.positions[v][k];
+      box.extend(mesh.positions[v]);
+    }
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) indices[3 * t + k] = mesh.triangles[t][k];
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(rtc_scene_, geometry, static_cast<unsigned>(m));
+    rtcReleaseGeometry(geometry);
+  }
+  if (!scene.spheres.empty()) {
+    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(scene.spheres.size()));
+    rtcSetGeometryUserData(geometry, const_cast<std::vector<Sphere>*>(&scene.spheres));
+    rtcSetGeometryBoundsFunction(geometry, sphere_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, sphere_intersect);
+    rtcSetGeometryOccludedFunction(geometry, sphere_occluded);
+    rtcCommitGeometry(geometry);
+    sphere_geometry_ = static_cast<unsigned>(scene.meshes.size());
+    rtcAttachGeometryByID(rtc_scene_, geometry, sphere_geometry_);
+    rtcReleaseGeometry(geometry);
+    for (const Sphere& s : scene.spheres) {
+      box.extend(s.center - Vec3::Constant(s.radius));
+      box.extend(s.center + Vec3::Constant(s.radius));
+    }
+  }
+  rtcCommitScene(rtc_scene_);
+  check_device(device_, "build the scene");
+  const float extent = box.isEmpty() ? 1.0f : std::max(box.diagonal().norm(), box.max().cwiseAbs().maxCoeff());
+  ray_epsilon_ = 1e-5f * std::max(extent, 1e-3f);
+}
+
+RayTracer::~RayTracer() {
+  if (rtc_scene_) rtcReleaseScene(rtc_scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distance) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rayhit{};
+  rayhit.ray.org_x = ray.origin.x();
+  rayhit.ray.org_y = ray.origin.y();
+  rayhit.ray.org_z = ray.origin.z();
+  rayhit.ray.dir_x = ray.direction.x();
+  rayhit.ray.dir_y = ray.direction.y();
+  rayhit.ray.dir_z = ray.direction.z();
+  rayhit.ray.tnear = 0.0f;
+  rayhit.ray.tfar = max_distance;
+  rayhit.ray.mask = ~0u;
+  rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(rtc_scene_, &context, &rayhit);
+  if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+
+  SurfaceHit hit;
+  hit.distance = rayhit.ray.tfar;
+  const unsigned geometry = rayhit.hit.geomID, primitive = rayhit.hit.primID;
+  if (geometry == sphere_geometry_) {
+    const Sphere& sphere = scene_.spheres[primitive];
+    const Vec3 n = Vec3(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z).normalized();
+    hit.position = sphere.center + sphere.radius * n;  // exactly on the surface
+    hit.normal = hit.geometric_normal = n;
+    hit.uv = direction_to_latlong(sphere.rotation.transpose() * n);
+    hit.material = sphere.material;
+  } else {
+    const TriangleMesh& mesh = scene_.meshes[geometry];
+    const auto& t = mesh.triangles[primitive];
+    const float u = rayhit.hit.u, v = rayhit.hit.v, w = 1.0f - u - v;
+    hit.position = ray.origin + hit.distance * ray.direction;
+    hit.geometric_normal = Vec3(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z).normalized();
+    const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
+    hit.normal = shading.norm() > 0.0f ? shading.normalized() : hit.geometric_normal;
+    hit.uv = mesh.uvs.empty() ? Vec2::Zero() : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
+    hit.material = mesh.material;
+  }
+  if (hit.geometric_normal.dot(ray.direction) > 0.0f) {  // two-sided: face the viewer
+    hit.geometric_normal = -hit.geometric_normal;
+    hit.normal = -hit.normal;
+  }
+  return hit;
+}
+
+bool RayTracer::occluded(const Ray& ray, float max_distance) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay r{};
+  r.org_x = ray.origin.x();
+  r.org_y = ray.origin.y();
+  r.org_z = ray.origin.z();
+  r.dir_x = ray.direction.x();
+  r.dir_y = ray.direction.y();
+  r.dir_z = ray.direction.z();
+  r.tnear = 0.0f;
+  r.tfar = max_distance;
+  r.mask = ~0u;
+  rtcOccluded1(rtc_scene_, &context, &r);
+  return r.tfar < 0.0f;
+}
+
+}  // namespace glaze

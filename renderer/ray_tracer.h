@@ -1,0 +1,52 @@
+// ray_tracer.h: the scene's geometry in Embree 3, the one ray caster used by the path
+// tracer, the SH integrator and the inverse module's sample extraction.
+//
+// Triangle meshes are Embree triangles with interpolated shading normals and texture
+// coordinates. Analytic spheres are Embree user geometry intersected in double
+// precision, with exact normals (p - c) / r and hit points projected onto the surface:
+// the inverse fits depend on exact normals. Surfaces are two-sided: the normals of a
+// hit are turned to face the incoming ray.
+#pragma once
+
+#include "renderer/camera.h"
+#include "renderer/scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <limits>
+#include <optional>
+
+namespace glaze {
+
+struct SurfaceHit {
+  float distance;          // along the (unit) ray direction
+  Vec3 position;
+  Vec3 normal;             // shading normal, unit, facing the ray's origin side
+  Vec3 geometric_normal;   // unit, facing the ray's origin side
+  Vec2 uv;                 // texture coordinate (0, 0 if the mesh has none)
+  int material;
+};
+
+class RayTracer {
+ public:
+  explicit RayTracer(const Scene& scene);
+  ~RayTracer();
+  RayTracer(const RayTracer&) = delete;
+  RayTracer& operator=(const RayTracer&) = delete;
+
+  std::optional<SurfaceHit> intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
+  // True if anything lies along the ray closer than max_distance.
+  bool occluded(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
+
+  // A distance to move ray origins off a surface, relative to the scene's size.
+  float ray_epsilon() const { return ray_epsilon_; }
+
+ private:
+  const Scene& scene_;
+  RTCDevice device_ = nullptr;
+  RTCScene rtc_scene_ = nullptr;
+  unsigned sphere_geometry_ = RTC_INVALID_GEOMETRY_ID;
+  float ray_epsilon_ = 1e-4f;
+};
+
+}  // namespace glaze

@@ -1,0 +1,108 @@
+#include "renderer/render.h"
+
+#include "renderer/error.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <mutex>
+#include <numeric>
+
+namespace glaze {
+namespace {
+
+constexpr int kTile = 16;
+
+// A random permutation of 0..n-1 (Fisher-Yates).
+void shuffle(std::vector<int>& values, Pcg32& rng) {
+  for (int i = static_cast<int>(values.size()) - 1; i > 0; --i)
+    std::swap(values[i], values[rng.next_uint() % (i + 1)]);
+}
+
+class ProgressBar {
+ public:
+  ProgressBar(bool enabled, int total) : enabled_(enabled), total_(total) {}
+  void advance() {
+    if (!enabled_) return;
+    const int done = ++done_;
+    const int percent = 100 * done / total_;
+    std::lock_guard lock(mutex_);
+    if (percent == shown_) return;
+    shown_ = percent;
+    const int bar = percent / 4;
+    std::fprintf(stderr, "\r[%.*s%*s] %3d%%", bar, "=========================", 25 - bar, "", percent);
+    if (done == total_) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool enabled_;
+  int total_;
+  std::atomic<int> done_{0};
+  std::mutex mutex_;
+  int shown_ = -1;
+};
+
+}  // namespace
+
+RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options) {
+  if (options.spp < 1) throw Error("samples per pixel must be at least 1");
+  const int width = camera.width, height = camera.height;
+  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
+  std::vector<double> sum(size_t(width) * height * 3, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  int passes = 0;
+  do {
+    const int pass = passes;
+    ProgressBar progress(options.progress && options.time_budget <= 0.0, tiles_x * tiles_y);
+    arena.execute([&] {
+      tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+        const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+        std::vector<int> strata_x(options.spp), strata_y(options.spp);
+        for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+          for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+            const uint64_t pixel = uint64_t(y) * width + x;
+            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), pixel);
+            std::iota(strata_x.begin(), strata_x.end(), 0);
+            std::iota(strata_y.begin(), strata_y.end(), 0);
+            shuffle(strata_x, rng);
+            shuffle(strata_y, rng);
+            RGBd pixel_sum = RGBd::Zero();
+            for (int s = 0; s < options.spp; ++s) {
+              const float fx = (strata_x[s] + rng.next_float()) / options.spp;
+              const float fy = (strata_y[s] + rng.next_float()) / options.spp;
+              pixel_sum += tracer.radiance(camera.generate_ray(x + fx, y + fy), rng).cast<double>();
+            }
+            for (int c = 0; c < 3; ++c) sum[pixel * 3 + c] += pixel_sum[c];
+          }
+        }
+        progress.advance();
+      });
+    });
+    ++passes;
+  } while (options.time_budget > 0.0 && elapsed() < options.time_budget);
+
+  RenderResult result;
+  result.spp = passes * options.spp;
+  result.seconds = elapsed();
+  result.image = Image(width, height);
+  size_t non_finite = 0;
+  for (size_t k = 0; k < sum.size(); ++k) {
+    double value = sum[k] / result.spp;
+    if (!std::isfinite(value)) {
+      value = 0.0;
+      ++non_finite;
+    }
+    result.image.pixels[k] = static_cast<float>(value);
+  }
+  if (non_finite > 0) warn(std::to_string(non_finite) + " pixel values were not finite and were set to 0");
+  return result;
+}
+
+}  // namespace glaze

@@ -1,0 +1,86 @@
+// scene.h: what a glTF scene becomes (DESIGN §4): world-space triangle meshes and
+// analytic spheres, polished materials (with optional diffuse textures), cameras, the
+// environment and the film size. Loaded by load_scene() (gltf_loader.cpp); turned into
+// Embree geometry by RayTracer.
+#pragma once
+
+#include "renderer/camera.h"
+#include "renderer/environment.h"
+#include "renderer/material.h"
+#include "renderer/texture.h"
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace glaze {
+
+struct SceneMaterial {
+  std::string name;
+  float R0 = 0.04f;
+  RGB Rd = RGB::Ones();  // factor; times the texture where there is one
+  int texture = -1;      // index into Scene::textures, or -1
+};
+
+struct TriangleMesh {
+  std::string name;
+  std::vector<Vec3> positions;  // world space
+  std::vector<Vec3> normals;    // world space, unit, per vertex (generated when absent)
+  std::vector<Vec2> uvs;        // per vertex, or empty
+  std::vector<std::array<uint32_t, 3>> triangles;
+  int material = 0;
+};
+
+// An analytic sphere. Its texture coordinates are the lat-long (u, v) of DESIGN §3 of
+// the surface normal turned into the sphere's own frame (the node's rotation).
+struct Sphere {
+  std::string name;
+  Vec3 center;
+  float radius;
+  int material;
+  Mat3 rotation = Mat3::Identity();  // sphere frame -> world
+};
+
+struct CameraSpec {
+  std::string name;
+  Eigen::Affine3f camera_to_world;
+  float yfov;          // radians
+  float aspect = 0.0f;  // width / height, 0 if the file does not say
+};
+
+struct EnvironmentSpec {
+  std::string source;  // file path (resolved) or procedural:NAME
+  EnvironmentOptions options;
+  int width = 1024, height = 512;  // of a procedural map
+};
+
+struct Scene {
+  std::string path;
+  std::vector<SceneMaterial> materials;
+  std::vector<Texture> textures;
+  std::vector<TriangleMesh> meshes;
+  std::vector<Sphere> spheres;
+  std::vector<CameraSpec> cameras;
+  std::optional<EnvironmentSpec> environment;
+  std::optional<std::pair<int, int>> film;  // scene.extras.glaze.film
+
+  // The named camera; throws glaze::Error listing the cameras when there is none.
+  const CameraSpec& camera(const std::string& name) const;
+  // Film size: `resolution` if given, else the scene's film, else 512 high with the
+  // camera's aspect ratio.
+  PinholeCamera make_camera(const CameraSpec& spec, std::optional<std::pair<int, int>> resolution) const;
+
+  // The material at a surface point with texture coordinate uv.
+  PolishedMaterial material_at(int material, const Vec2& uv) const;
+
+  // One analytic sphere and nothing else: nothing can shadow or reflect the object onto
+  // itself, so one bounce and no occlusion rays are exact (DESIGN §6).
+  bool is_single_convex_object() const { return meshes.empty() && spheres.size() == 1; }
+};
+
+// Loads a .gltf or .glb file. Throws glaze::Error naming the file and the element at
+// fault (missing buffer, index out of range, missing texture, cyclic nodes, ...).
+Scene load_scene(const std::string& path);
+
+}  // namespace glaze
