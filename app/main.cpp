@@ -2,6 +2,7 @@
 // renderer and inverse libraries, prints results, and turns glaze::Error into a clear
 // message and a non-zero exit status.
 #include "app/arguments.h"
+#include "app/commands.h"
 #include "renderer/environment.h"
 #include "renderer/error.h"
 #include "renderer/material.h"
@@ -28,6 +29,9 @@ usage:
   glaze sh ENV [options]         print the SH coefficients of ENV as JSON
   glaze env procedural NAME --out FILE.exr [--res WxH]
                                  write a procedural environment map
+  glaze render SCENE [options] --out FILE.exr|DIR
+  glaze render SCENE --captures DIR [--holdout NAME,...] [options]
+                                 path-trace a glTF scene's cameras / a capture set
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -39,6 +43,19 @@ options of `sh`:
   --rotation DEG      rotate the map about +Y (default 0)
   --to-world a,b,...  3x3 rotation, row-major, applied before --rotation
   --res WxH           resolution of a procedural map (default 1024x512)
+
+options of `render`:
+  --camera NAME|all   which camera (default: the first); all writes DIR/NAME.exr
+  --res WxH           film size (default: the scene's film, else 512 high)
+  --spp N             samples per pixel (default 64)
+  --time-budget SEC   render passes of --spp samples (default 4) until SEC is spent
+  --seed S            random seed (default 0); the image depends only on it
+  --threads N         worker threads (default: all cores)
+  --max-depth N       surface interactions per path (default 8; 1 for a single sphere)
+  --estimator E       direct light: mis (default), bsdf or environment
+  --env ENV           replace the scene's environment
+  --env-scale S, --env-rotation DEG   adjust it
+  --integrator path   the Monte-Carlo path tracer
 )";
 
 EnvironmentOptions environment_options(const Arguments& args) {
@@ -141,6 +158,7 @@ int run(const std::vector<std::string>& args) {
   if (command == "demo") return command_demo();
   if (command == "sh") return command_sh(rest);
   if (command == "env") return command_env(rest);
+  if (command == "render") return command_render(rest);
   throw Error("unknown command '" + command + "' (see `glaze help`)");
 }
 

@@ -76,9 +76,7 @@ Image read_image(const std::string& path) {
 
 Image read_image_from_memory(const unsigned char* bytes, size_t size, const std::string& name) {
   OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(bytes), size);
-  OIIO::ImageSpec config;
-  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &reader);
-  auto input = OIIO::ImageInput::open(name, &config);
+  auto input = OIIO::ImageInput::open(name, nullptr, &reader);
   if (!input) throw Error(name + ": cannot be decoded as an image (" + OIIO::geterror() + ")");
   return decode(*input, name);
 }

@@ -60,7 +60,7 @@ RGB PathTracer::radiance(const Ray& camera_ray, Pcg32& rng) const {
     const Frame frame = Frame::from_normal(hit->normal);
     const Vec3 wo = frame.to_local(-ray.direction);
     const PolishedMaterial material = scene_.material_at(hit->material, hit->uv);
-    const Vec3 origin = hit->position + tracer_.ray_epsilon() * hit->geometric_normal;
+    const Vec3 origin = hit->position + RayTracer::ray_offset(hit->position) * hit->geometric_normal;
 
     if (use_environment_samples) {
       const EnvironmentSample light = environment_.sample(Vec2(rng.next_float(), rng.next_float()));

@@ -76,7 +76,6 @@ RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
   rtc_scene_ = rtcNewScene(device_);
   rtcSetSceneFlags(rtc_scene_, RTC_SCENE_FLAG_ROBUST);
 
-  Eigen::AlignedBox3f box;
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     const TriangleMesh& mesh = scene.meshes[m];
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -85,10 +84,8 @@ RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
     auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(uint32_t), mesh.triangles.size()));
     check_device(device_, "allocate a triangle mesh");
-    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    for (size_t v = 0; v < mesh.positions.size(); ++v)
       for (int k = 0; k < 3; ++k) vertices[3 * v + k] = mesh.positions[v][k];
-      box.extend(mesh.positions[v]);
-    }
     for (size_t t = 0; t < mesh.triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) indices[3 * t + k] = mesh.triangles[t][k];
     rtcCommitGeometry(geometry);
@@ -106,15 +103,9 @@ RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
     sphere_geometry_ = static_cast<unsigned>(scene.meshes.size());
     rtcAttachGeometryByID(rtc_scene_, geometry, sphere_geometry_);
     rtcReleaseGeometry(geometry);
-    for (const Sphere& s : scene.spheres) {
-      box.extend(s.center - Vec3::Constant(s.radius));
-      box.extend(s.center + Vec3::Constant(s.radius));
-    }
   }
   rtcCommitScene(rtc_scene_);
   check_device(device_, "build the scene");
-  const float extent = box.isEmpty() ? 1.0f : std::max(box.diagonal().norm(), box.max().cwiseAbs().maxCoeff());
-  ray_epsilon_ = 1e-5f * std::max(extent, 1e-3f);
 }
 
 RayTracer::~RayTracer() {

@@ -13,6 +13,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <limits>
 #include <optional>
 
@@ -38,15 +39,17 @@ class RayTracer {
   // True if anything lies along the ray closer than max_distance.
   bool occluded(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
 
-  // A distance to move ray origins off a surface, relative to the scene's size.
-  float ray_epsilon() const { return ray_epsilon_; }
+  // How far to move a ray's origin off a surface at `position` so that it does not hit
+  // that surface again: a few float ulps of the coordinates' magnitude.
+  static float ray_offset(const Vec3& position) {
+    return 1e-5f * std::max(1.0f, position.cwiseAbs().maxCoeff());
+  }
 
  private:
   const Scene& scene_;
   RTCDevice device_ = nullptr;
   RTCScene rtc_scene_ = nullptr;
   unsigned sphere_geometry_ = RTC_INVALID_GEOMETRY_ID;
-  float ray_epsilon_ = 1e-4f;
 };
 
 }  // namespace glaze

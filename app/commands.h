@@ -1,0 +1,11 @@
+// commands.h: the glaze subcommands that live outside main.cpp.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace glaze {
+
+int command_render(const std::vector<std::string>& args);
+
+}  // namespace glaze

@@ -1,0 +1,184 @@
+// render_command.cpp: `glaze render`: images of a glTF scene's cameras, or a capture
+// set (DESIGN §4) for the inverse module.
+#include "app/arguments.h"
+#include "app/commands.h"
+#include "renderer/capture_set.h"
+#include "renderer/error.h"
+#include "renderer/path_tracer.h"
+#include "renderer/ray_tracer.h"
+#include "renderer/render.h"
+#include "renderer/scene.h"
+
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+namespace glaze {
+namespace {
+
+// The scene's environment with the command line's overrides applied.
+EnvironmentSpec environment_spec(const Scene& scene, const Arguments& args) {
+  EnvironmentSpec spec;
+  if (args.has("env")) {
+    spec.source = args.text("env", "");
+  } else if (scene.environment) {
+    spec = *scene.environment;
+  } else {
+    throw Error(scene.path + ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or --env procedural:office");
+  }
+  spec.options.scale = args.real("env-scale", spec.options.scale);
+  spec.options.rotation_degrees = args.real("env-rotation", spec.options.rotation_degrees);
+  return spec;
+}
+
+nlohmann::json environment_json(const EnvironmentSpec& spec) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({spec.options.to_world(r, 0), spec.options.to_world(r, 1), spec.options.to_world(r, 2)});
+  return {{"scale", spec.options.scale}, {"rotation", spec.options.rotation_degrees}, {"to_world", rows}};
+}
+
+std::string materials_json(const Scene& scene) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const SceneMaterial& m : scene.materials) {
+    nlohmann::json entry = {{"name", m.name}, {"R0", m.R0}, {"Rd", {m.Rd[0], m.Rd[1], m.Rd[2]}}};
+    if (m.texture >= 0) entry["texture"] = scene.textures[m.texture].source;
+    list.push_back(entry);
+  }
+  return list.dump();
+}
+
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> names;
+  std::stringstream stream(text);
+  for (std::string name; std::getline(stream, name, ',');)
+    if (!name.empty()) names.push_back(name);
+  return names;
+}
+
+struct Job {
+  const Scene& scene;
+  const EnvironmentSpec& environment_spec;
+  const PathTracer& tracer;
+  RenderOptions options;
+  std::optional<std::pair<int, int>> resolution;
+
+  void render_to(const CameraSpec& spec, const std::string& path) const {
+    const PinholeCamera camera = scene.make_camera(spec, resolution);
+    if (options.progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
+    const RenderResult result = render(tracer, camera, options);
+    write_image(path, result.image,
+                {{"glaze:integrator", "path"},
+                 {"glaze:spp", std::to_string(result.spp)},
+                 {"glaze:seconds", std::to_string(result.seconds)},
+                 {"glaze:seed", std::to_string(options.seed)},
+                 {"glaze:max_depth", std::to_string(tracer.max_depth())},
+                 {"glaze:camera", spec.name},
+                 {"glaze:scene", scene.path},
+                 {"glaze:environment", environment_spec.source},
+                 {"glaze:materials", materials_json(scene)}});
+    std::cerr << "wrote " << path << " (" << result.spp << " spp, " << result.seconds << " s)\n";
+  }
+};
+
+void write_captures(const Job& job, const std::string& directory, const std::vector<std::string>& holdout,
+                    const Environment& environment) {
+  const Scene& scene = job.scene;
+  for (const std::string& name : holdout) scene.camera(name);  // unknown names fail before any work
+  const std::filesystem::path root(directory);
+  std::filesystem::create_directories(root / (holdout.empty() ? "" : "holdout"));
+
+  // The object: the analytic sphere exactly, else the scene file itself.
+  nlohmann::json object;
+  if (scene.is_single_convex_object()) {
+    const Sphere& s = scene.spheres.front();
+    object = {{"type", "sphere"}, {"center", {s.center.x(), s.center.y(), s.center.z()}}, {"radius", s.radius}};
+  } else {
+    object = {{"gltf", std::filesystem::absolute(scene.path).string()}};
+  }
+  // The environment, as a file next to the captures when it is procedural.
+  nlohmann::json environment_entry = environment_json(job.environment_spec);
+  if (job.environment_spec.source.starts_with("procedural:")) {
+    write_image((root / "environment.exr").string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
+    environment_entry["file"] = "environment.exr";
+    environment_entry["procedural"] = job.environment_spec.source.substr(11);
+  } else {
+    environment_entry["file"] = std::filesystem::absolute(job.environment_spec.source).string();
+  }
+  nlohmann::json material;
+  if (scene.materials.size() == 1 || (scene.is_single_convex_object())) {
+    const SceneMaterial& m = scene.materials[scene.is_single_convex_object() ? scene.spheres.front().material : 0];
+    material = {{"R0", m.R0}, {"Rd", {m.Rd[0], m.Rd[1], m.Rd[2]}}};
+    if (m.texture >= 0) material["texture"] = scene.textures[m.texture].source;
+  }
+
+  for (bool held_out : {false, true}) {
+    CaptureSet set{{}, object, environment_entry, material};
+    const std::filesystem::path folder = held_out ? root / "holdout" : root;
+    if (held_out) set.environment["file"] = environment_entry["file"].get<std::string>() == "environment.exr"
+                                                ? "../environment.exr" : environment_entry["file"];
+    for (const CameraSpec& spec : scene.cameras) {
+      const bool is_holdout = std::find(holdout.begin(), holdout.end(), spec.name) != holdout.end();
+      if (is_holdout != held_out) continue;
+      char file[64];
+      std::snprintf(file, sizeof file, "view_%03zu.exr", set.frames.size());
+      job.render_to(spec, (folder / file).string());
+      set.frames.push_back({file, scene.make_camera(spec, job.resolution), ""});
+    }
+    if (!set.frames.empty()) write_transforms(folder.string(), set);
+  }
+}
+
+}  // namespace
+
+int command_render(const std::vector<std::string>& raw) {
+  const Arguments args(raw, {"camera", "res", "spp", "time-budget", "seed", "threads", "integrator", "max-depth", "env",
+                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout"});
+  if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
+    throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
+  const std::string integrator = args.text("integrator", "path");
+  if (integrator != "path") throw Error("unknown integrator '" + integrator + "' (known: path)");
+  if (args.has("holdout") && !args.has("captures")) throw Error("--holdout applies to --captures");
+
+  const Scene scene = load_scene(args.positionals()[0]);
+  const EnvironmentSpec spec = environment_spec(scene, args);
+  const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
+  const RayTracer ray_tracer(scene);
+
+  PathTracerOptions path_options;
+  path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
+  path_options.estimator = parse_direct_light_estimator(args.text("estimator", "mis"));
+  path_options.black_background = args.has("captures");
+  const PathTracer tracer(scene, ray_tracer, environment, path_options);
+
+  RenderOptions options;
+  options.spp = static_cast<int>(args.integer("spp", 64, 1, 1 << 20));
+  options.time_budget = args.real("time-budget", 0.0f);
+  if (options.time_budget < 0.0) throw Error("option --time-budget must be >= 0 seconds");
+  options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, std::numeric_limits<long>::max()));
+  options.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
+  options.progress = isatty(STDERR_FILENO);
+  if (args.has("time-budget") && !args.has("spp")) options.spp = 4;  // samples per pass
+
+  if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
+  const Job job{scene, spec, tracer, options,
+                args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt};
+
+  if (args.has("captures")) {
+    write_captures(job, args.text("captures", ""), split_names(args.text("holdout", "")), environment);
+    return 0;
+  }
+  const std::string camera_name = args.text("camera", scene.cameras.front().name);
+  const std::string out = args.text("out", "");
+  if (camera_name == "all") {
+    std::filesystem::create_directories(out);
+    for (const CameraSpec& camera : scene.cameras) job.render_to(camera, (std::filesystem::path(out) / (camera.name + ".exr")).string());
+  } else {
+    job.render_to(scene.camera(camera_name), out);
+  }
+  return 0;
+}
+
+}  // namespace glaze
