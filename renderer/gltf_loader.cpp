@@ -35,8 +35,13 @@ class GltfLoader {
       // A file without scenes: every root node is part of the scene.
       std::set<int> children;
       for (const auto& node : model_.nodes) children.insert(node.children.begin(), node.children.end());
-      for (int i = 0; i < static_cast<int>(model_.nodes.size()); ++i)
-        if (!children.count(i)) visit_node(i, Eigen::Affine3f::Identity());
+      bool any_root = false;
+      for (int i = 0; i < static_cast<int>(model_.nodes.size()); ++i) {
+        if (children.count(i)) continue;
+        any_root = true;
+        visit_node(i, Eigen::Affine3f::Identity());
+      }
+      if (!any_root && !model_.nodes.empty()) fail("every node is some node's child: the node hierarchy has a cycle");
     } else {
       if (scene_index >= static_cast<int>(model_.scenes.size())) fail("defaultScene " + std::to_string(scene_index) + " does not exist");
       const tinygltf::Scene& scene = model_.scenes[scene_index];
@@ -143,7 +148,11 @@ class GltfLoader {
       fail(what + ": texture " + std::to_string(index) + " has no image (source " + std::to_string(source) + ")");
     if (const auto it = texture_of_image_.find(source); it != texture_of_image_.end()) return it->second;
     const auto decoded = decoded_.find(source);
-    if (decoded == decoded_.end()) fail(what + ": image " + std::to_string(source) + " could not be read");
+    if (decoded == decoded_.end()) {
+      const std::string& uri = model_.images[source].uri;
+      fail(what + ": texture image " + std::to_string(source) + (uri.empty() ? "" : " '" + uri + "'") +
+           " was not found or could not be decoded (paths are relative to the glTF file)");
+    }
     Texture texture{model_.images[source].uri.empty() ? "image " + std::to_string(source) : model_.images[source].uri,
                     decoded->second};
     size_t clamped = 0;
@@ -337,11 +346,15 @@ class GltfLoader {
         for (uint32_t v = 0; v < vertex_count; ++v) indices.push_back(v);
       }
       if (indices.size() % 3 != 0) fail(what + ": index count " + std::to_string(indices.size()) + " is not a multiple of 3");
+      // A transform with negative determinant mirrors the mesh, which reverses the
+      // winding (glTF 2.0 §3.7.4); swapping two corners keeps faces facing outwards.
+      const bool mirrored = world.linear().determinant() < 0.0f;
       for (size_t t = 0; t < indices.size(); t += 3) {
         for (int k = 0; k < 3; ++k)
           if (indices[t + k] >= vertex_count)
             fail(what + ": index " + std::to_string(indices[t + k]) + " is out of range (" + std::to_string(vertex_count) + " vertices)");
-        out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
+        if (mirrored) out.triangles.push_back({indices[t], indices[t + 2], indices[t + 1]});
+        else out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
       }
       if (const auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
         const std::vector<float> normals = read_floats(normal->second, 3, what + " NORMAL");
