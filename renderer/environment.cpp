@@ -4,6 +4,7 @@
 #include "renderer/latlong.h"
 #include "renderer/procedural_environment.h"
 
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -55,19 +56,35 @@ Vec3 Environment::uv_to_direction(const Vec2& uv) const {
   return local_to_world_ * latlong_to_direction(uv);
 }
 
-RGB Environment::eval(const Vec3& w) const {
-  const Vec2 uv = direction_to_uv(w);
-  const float x = uv.x() * map_.width - 0.5f, y = uv.y() * map_.height - 0.5f;
+EnvironmentLookup Environment::locate(const Vec3& w) const {
+  const Vec3 d = local_to_world_.transpose() * w;
+  EnvironmentLookup at;
+  at.uv = direction_to_latlong(d);
+  at.sin_theta = latlong_sin_theta(d);
+  const float x = at.uv.x() * map_.width - 0.5f, y = at.uv.y() * map_.height - 0.5f;
   const float x_floor = std::floor(x), y_floor = std::floor(y);
-  const float fx = x - x_floor, fy = y - y_floor;
+  at.fx = x - x_floor;
+  at.fy = y - y_floor;
   const int width = map_.width, height = map_.height;
-  const int x0 = ((static_cast<int>(x_floor) % width) + width) % width;
-  const int x1 = (x0 + 1) % width;
-  const int y0 = std::clamp(static_cast<int>(y_floor), 0, height - 1);
-  const int y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, height - 1);
-  const RGB top = (1.0f - fx) * map_.at(x0, y0) + fx * map_.at(x1, y0);
-  const RGB bottom = (1.0f - fx) * map_.at(x0, y1) + fx * map_.at(x1, y1);
-  return scale_ * ((1.0f - fy) * top + fy * bottom);
+  at.x0 = static_cast<int>(x_floor);  // in [-1, width - 1]: u is in [0, 1)
+  if (at.x0 < 0) at.x0 += width;
+  at.x1 = at.x0 + 1 == width ? 0 : at.x0 + 1;
+  at.y0 = std::clamp(static_cast<int>(y_floor), 0, height - 1);
+  at.y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, height - 1);
+  return at;
+}
+
+void Environment::prefetch(const EnvironmentLookup& at, bool density) const {
+  const float* texels = map_.pixels.data();
+  for (int y : {at.y0, at.y1})
+    for (int x : {at.x0, at.x1}) __builtin_prefetch(texels + (size_t(y) * map_.width + x) * 3);
+  if (density) sampling().distribution.prefetch(at.uv);
+}
+
+RGB Environment::eval(const EnvironmentLookup& at) const {
+  const RGB top = (1.0f - at.fx) * map_.at(at.x0, at.y0) + at.fx * map_.at(at.x1, at.y0);
+  const RGB bottom = (1.0f - at.fx) * map_.at(at.x0, at.y1) + at.fx * map_.at(at.x1, at.y1);
+  return scale_ * ((1.0f - at.fy) * top + at.fy * bottom);
 }
 
 namespace {
@@ -130,9 +147,32 @@ const Environment::Sampling& Environment::sampling() const {
 }
 
 EnvironmentSample Environment::sample(const Vec2& u) const {
-  const Sampling& tables = sampling();
   float pdf_uv = 0.0f;
-  const Vec2 uv = tables.distribution.sample(u, &pdf_uv);
+  const Vec2 uv = sampling().distribution.sample(u, &pdf_uv);
+  return sample_at(uv, pdf_uv);
+}
+
+void Environment::sample(std::span<const Vec2> u, std::span<EnvironmentSample> out) const {
+  const Distribution2D& distribution = sampling().distribution;
+  constexpr size_t kChunk = 16;
+  for (size_t first = 0; first < u.size(); first += kChunk) {
+    const size_t n = std::min(kChunk, u.size() - first);
+    std::array<int, kChunk> row;
+    std::array<float, kChunk> y, pdf_row;
+    for (size_t k = 0; k < n; ++k) {
+      y[k] = distribution.sample_row(u[first + k].y(), &pdf_row[k], &row[k]);
+      distribution.prefetch_in_row(row[k], u[first + k].x());
+    }
+    for (size_t k = 0; k < n; ++k) {
+      float pdf_column = 0.0f;
+      const float x = distribution.sample_in_row(row[k], u[first + k].x(), &pdf_column);
+      out[first + k] = sample_at(Vec2(x, y[k]), pdf_row[k] * pdf_column);
+    }
+  }
+}
+
+EnvironmentSample Environment::sample_at(const Vec2& uv, float pdf_uv) const {
+  const Sampling& tables = sampling();
   if (!(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
   Vec3 d;
   float sin_theta = 0.0f;
@@ -151,11 +191,9 @@ EnvironmentSample Environment::sample(const Vec2& u) const {
   return {local_to_world_ * d, pdf_uv / (2.0f * kPi * kPi * sin_theta)};
 }
 
-float Environment::pdf(const Vec3& w) const {
-  const Vec3 d = local_to_world_.transpose() * w;
-  const float sin_theta = latlong_sin_theta(d);
-  if (!(sin_theta > 0.0f)) return 0.0f;
-  return sampling().distribution.pdf(direction_to_latlong(d)) / (2.0f * kPi * kPi * sin_theta);
+float Environment::pdf(const EnvironmentLookup& at) const {
+  if (!(at.sin_theta > 0.0f)) return 0.0f;
+  return sampling().distribution.pdf(at.uv) / (2.0f * kPi * kPi * at.sin_theta);
 }
 
 const ShCoefficients& Environment::sh(int lmax) const {

@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 
 namespace glaze {
@@ -24,6 +25,15 @@ struct EnvironmentOptions {
   float scale = 1.0f;
   float rotation_degrees = 0.0f;
   Mat3 to_world = Mat3::Identity();  // must be a rotation
+};
+
+// A direction located in the map: what eval() and pdf() read, computed once so that a
+// caller can prefetch the texels (see prefetch()) and do other work while they arrive.
+struct EnvironmentLookup {
+  int x0, x1, y0, y1;  // the bilinear footprint's texels
+  float fx, fy;        // and the weights of x1, y1
+  Vec2 uv;
+  float sin_theta;
 };
 
 struct EnvironmentSample {
@@ -46,14 +56,23 @@ class Environment {
   const Mat3& local_to_world() const { return local_to_world_; }
 
   // Radiance arriving from world direction w (scale included).
-  RGB eval(const Vec3& w) const;
+  RGB eval(const Vec3& w) const { return eval(locate(w)); }
+  RGB eval(const EnvironmentLookup& at) const;
+
+  EnvironmentLookup locate(const Vec3& w) const;
+  // Asks the memory system for the texels eval(at) reads (and, with `density`, the
+  // sampling density pdf(at) reads) without waiting for them.
+  void prefetch(const EnvironmentLookup& at, bool density) const;
 
   // Importance sampling: piecewise constant in (u, v) proportional to luminance times
   // sin(theta) (with each texel's weight the maximum over its 3x3 neighbourhood, so
   // that every direction where the bilinear lookup is non-zero can be sampled). Built
   // on first use: a scene that never samples the environment never pays for it.
   EnvironmentSample sample(const Vec2& u) const;
-  float pdf(const Vec3& w) const;
+  // The same for many u at once, interleaved so that their table lookups overlap.
+  void sample(std::span<const Vec2> u, std::span<EnvironmentSample> out) const;
+  float pdf(const Vec3& w) const { return pdf(locate(w)); }
+  float pdf(const EnvironmentLookup& at) const;
 
   // SH coefficients of the (scaled, oriented) environment, computed once per lmax.
   const ShCoefficients& sh(int lmax) const;
@@ -75,6 +94,8 @@ class Environment {
     std::vector<Eigen::Vector2f> column_start;  // (sin, cos) of phi = 2 pi i / W
   };
   const Sampling& sampling() const;
+  // The sample at map coordinates uv drawn with density pdf_uv.
+  EnvironmentSample sample_at(const Vec2& uv, float pdf_uv) const;
 
   Image map_;
   float scale_;

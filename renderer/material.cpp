@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -40,22 +41,49 @@ float diffuse_lobe_pdf(float cos_theta) {
   return static_cast<float>(kDiffuseNormalisation) * coat_transmittance_g(cos_theta) * cos_theta;
 }
 
-Vec3 sample_diffuse_lobe(const Vec2& u) {
-  // Invert the CDF of mu by Newton's method safeguarded by bisection; the CDF is a
-  // monotone polynomial, so this converges in a handful of steps.
-  const double target = std::clamp(static_cast<double>(u.x()), 0.0, 1.0);
-  double low = 0.0, high = 1.0;
-  double mu = std::cbrt(target / 3.5);  // C(mu) ~ 3.5 mu^3 near 0
-  for (int iteration = 0; iteration < 40; ++iteration) {
+namespace {
+
+// Solves C(mu) = target on [low, high] (which must bracket the root) from the guess mu,
+// by Newton's method safeguarded by bisection: the CDF is a monotone polynomial.
+double invert_diffuse_lobe_cdf(double target, double mu, double low, double high) {
+  for (int iteration = 0; iteration < 50; ++iteration) {
     double density = 0.0;
     const double error = diffuse_lobe_cdf(mu, &density) - target;
     if (error > 0.0) high = mu; else low = mu;
     double next = density > 0.0 ? mu - error / density : 0.5 * (low + high);
     if (!(next > low && next < high)) next = 0.5 * (low + high);
-    if (std::abs(next - mu) < 1e-12) { mu = next; break; }
+    const bool converged = std::abs(next - mu) < 1e-10;
     mu = next;
+    if (converged || high - low < 1e-12) break;
   }
-  const float cos_theta = static_cast<float>(std::clamp(mu, 0.0, 1.0));
+  return std::clamp(mu, 0.0, 1.0);
+}
+
+// mu at u = k / kSteps, so that sampling starts Newton's method next to the root and
+// converges in one or two steps instead of five or more.
+constexpr int kInverseSteps = 256;
+const std::array<double, kInverseSteps + 1>& diffuse_lobe_inverse_table() {
+  static const std::array<double, kInverseSteps + 1> table = [] {
+    std::array<double, kInverseSteps + 1> mu{};
+    for (int k = 0; k <= kInverseSteps; ++k) {
+      const double target = double(k) / kInverseSteps;
+      mu[k] = invert_diffuse_lobe_cdf(target, std::cbrt(target / 3.5), 0.0, 1.0);  // C ~ 3.5 mu^3 near 0
+    }
+    return mu;
+  }();
+  return table;
+}
+
+}  // namespace
+
+Vec3 sample_diffuse_lobe(const Vec2& u) {
+  const double target = std::clamp(static_cast<double>(u.x()), 0.0, 1.0);
+  const auto& table = diffuse_lobe_inverse_table();
+  const double t = target * kInverseSteps;
+  const int k = std::min(static_cast<int>(t), kInverseSteps - 1);
+  const double guess = table[k] + (t - k) * (table[k + 1] - table[k]);
+  const double mu = invert_diffuse_lobe_cdf(target, guess, table[k], table[k + 1]);
+  const float cos_theta = static_cast<float>(mu);
   const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
   const float phi = 2.0f * kPi * u.y();
   return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
@@ -89,12 +117,20 @@ std::optional<MaterialSample> PolishedMaterial::sample(const Vec3& wo, float u_l
     return MaterialSample{Vec3(-wo.x(), -wo.y(), wo.z()), RGB::Constant(specular / p_specular),
                           p_specular, true};
   }
-  const Vec3 wi = sample_diffuse_lobe(u);
+  MaterialSample diffuse = *sample_diffuse(wo, u);
   const float p_diffuse = 1.0f - p_specular;
+  diffuse.weight /= p_diffuse;
+  diffuse.pdf *= p_diffuse;
+  return diffuse;
+}
+
+std::optional<MaterialSample> PolishedMaterial::sample_diffuse(const Vec3& wo, const Vec2& u) const {
+  if (!(wo.z() > 0.0f)) return std::nullopt;
+  const Vec3 wi = sample_diffuse_lobe(u);
   // f_d cos / pdf with pdf exactly proportional to g(mu_i) mu_i: only the outgoing
   // factor remains, so the estimate carries no noise from the BRDF itself.
-  const RGB weight = Rd_ * ((1.0f - R0_) * coat_transmittance_g(mu_o) / p_diffuse);
-  return MaterialSample{wi, weight, p_diffuse * diffuse_lobe_pdf(wi.z()), false};
+  const RGB weight = Rd_ * ((1.0f - R0_) * coat_transmittance_g(wo.z()));
+  return MaterialSample{wi, weight, diffuse_lobe_pdf(wi.z()), false};
 }
 
 float PolishedMaterial::pdf_diffuse(const Vec3& wo, const Vec3& wi) const {

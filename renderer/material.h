@@ -99,6 +99,10 @@ class PolishedMaterial {
   // diffuse lobe exactly proportional to g(mu_i) mu_i (zero-variance for the BRDF part).
   std::optional<MaterialSample> sample(const Vec3& wo, float u_lobe, const Vec2& u) const;
 
+  // The diffuse lobe alone (no lobe choice), for estimators that take the mirror term
+  // deterministically: weight f_d cos / pdf = Rd (1 - R0) g(mu_o), pdf diffuse_lobe_pdf.
+  std::optional<MaterialSample> sample_diffuse(const Vec3& wo, const Vec2& u) const;
+
   // Solid-angle density of sample() producing wi through the diffuse lobe.
   float pdf_diffuse(const Vec3& wo, const Vec3& wi) const;
 

@@ -5,9 +5,15 @@
 // a BSDF sample (mirror or diffuse lobe) that continues the path; the two estimates of
 // the diffuse lobe's direct light are combined by multiple importance sampling with the
 // power heuristic (Veach 1997). The mirror is a delta, so its light is only ever found
-// by the BSDF sample. Russian roulette from the third bounce on. For a single convex
-// object (Scene::is_single_convex_object) one bounce is exact and nothing can occlude
-// the environment, so no further intersection or shadow rays are traced.
+// by the BSDF sample. Russian roulette from the third bounce on.
+//
+// A single convex object (Scene::is_single_convex_object) needs one bounce and nothing
+// can occlude the environment, so no shadow rays or further intersections are traced.
+// There the mirror term F(n.v) L(r) is evaluated exactly instead of being chosen at
+// random against the diffuse lobe (splitting: its noise vanishes), and the diffuse lobe
+// is always sampled. That estimator runs over a batch of camera rays stage by stage,
+// prefetching the environment texels each stage will read, so that the cache misses of
+// looking up a large map overlap instead of queueing one after another.
 #pragma once
 
 #include "renderer/environment.h"
@@ -28,6 +34,7 @@ struct PathTracerOptions {
   int russian_roulette_depth = 3;    // first bounce at which paths may be terminated
   DirectLightEstimator estimator = DirectLightEstimator::mis;
   bool black_background = false;     // camera rays that miss return 0 (capture sets)
+  bool convex_shortcut = true;       // use the single-convex-object estimator where it applies
 };
 
 class PathTracer {
@@ -37,11 +44,19 @@ class PathTracer {
 
   // Radiance arriving at the camera along `ray`.
   RGB radiance(const Ray& ray, Pcg32& rng) const;
+  // The same for `count` rays (the samples of one pixel), into out[0..count).
+  void radiance(const Ray* rays, int count, Pcg32& rng, RGB* out) const;
 
   // The depth actually used: 1 for a single convex object, else options.max_depth.
   int max_depth() const { return max_depth_; }
 
  private:
+  RGB trace_path(const Ray& ray, Pcg32& rng) const;
+  void convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB* out) const;
+  // MIS weights of the two strategies for the diffuse lobe's direct light.
+  float light_sample_weight(float light_pdf, float bsdf_pdf) const;
+  float escape_weight(bool after_delta, float bsdf_pdf, float light_pdf) const;
+
   const Scene& scene_;
   const RayTracer& tracer_;
   const Environment& environment_;

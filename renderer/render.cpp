@@ -65,6 +65,8 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
       tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
         const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
         std::vector<int> strata_x(options.spp), strata_y(options.spp);
+        std::vector<Ray> rays(options.spp);
+        std::vector<RGB> radiance(options.spp);
         for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
           for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
             const uint64_t pixel = uint64_t(y) * width + x;
@@ -73,12 +75,14 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
             std::iota(strata_y.begin(), strata_y.end(), 0);
             shuffle(strata_x, rng);
             shuffle(strata_y, rng);
-            RGBd pixel_sum = RGBd::Zero();
             for (int s = 0; s < options.spp; ++s) {
               const float fx = (strata_x[s] + rng.next_float()) / options.spp;
               const float fy = (strata_y[s] + rng.next_float()) / options.spp;
-              pixel_sum += tracer.radiance(camera.generate_ray(x + fx, y + fy), rng).cast<double>();
+              rays[s] = camera.generate_ray(x + fx, y + fy);
             }
+            tracer.radiance(rays.data(), options.spp, rng, radiance.data());
+            RGBd pixel_sum = RGBd::Zero();
+            for (int s = 0; s < options.spp; ++s) pixel_sum += radiance[s].cast<double>();
             for (int c = 0; c < 3; ++c) sum[pixel * 3 + c] += pixel_sum[c];
           }
         }

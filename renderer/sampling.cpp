@@ -58,9 +58,7 @@ float Distribution1D::sample(float u, float* pdf, int* bin) const {
   return x;
 }
 
-float Distribution1D::pdf(float x) const {
-  return bins_[std::clamp(static_cast<int>(x * size()), 0, size() - 1)].pdf;
-}
+float Distribution1D::pdf(float x) const { return bins_[bin_of(x)].pdf; }
 
 Distribution2D::Distribution2D(std::span<const float> weights, int width, int height)
     : width_(width), height_(height), marginal_([&] {
@@ -81,15 +79,12 @@ Distribution2D::Distribution2D(std::span<const float> weights, int width, int he
 Vec2 Distribution2D::sample(const Vec2& u, float* pdf) const {
   float pdf_row = 0.0f, pdf_column = 0.0f;
   int row = 0;
-  const float y = marginal_.sample(u.y(), &pdf_row, &row);
-  const float x = rows_[row].sample(u.x(), &pdf_column, nullptr);
+  const float y = sample_row(u.y(), &pdf_row, &row);
+  const float x = sample_in_row(row, u.x(), &pdf_column);
   if (pdf) *pdf = pdf_row * pdf_column;
   return {x, y};
 }
 
-float Distribution2D::pdf(const Vec2& p) const {
-  const int row = std::clamp(static_cast<int>(p.y() * height_), 0, height_ - 1);
-  return marginal_.pdf(p.y()) * rows_[row].pdf(p.x());
-}
+float Distribution2D::pdf(const Vec2& p) const { return marginal_.pdf(p.y()) * rows_[row_of(p.y())].pdf(p.x()); }
 
 }  // namespace glaze

@@ -26,6 +26,8 @@ class Distribution1D {
   // Maps u in [0, 1) to x in [0, 1) with density pdf(x); never picks a zero-weight bin.
   float sample(float u, float* pdf, int* bin) const;
   float pdf(float x) const;
+  // Starts loading what pdf(x) reads.
+  void prefetch(float x) const { __builtin_prefetch(&bins_[bin_of(x)]); }
 
  private:
   // Per bin: the CDF at its start, its normalised density and the guide entry of the
@@ -41,6 +43,8 @@ class Distribution1D {
   std::vector<Bin> bins_;
   double integral_ = 0.0;
   float inverse_size_ = 1.0f;
+
+  int bin_of(float x) const { return std::clamp(static_cast<int>(x * size()), 0, size() - 1); }
 };
 
 // A piecewise-constant density on [0, 1)^2 over a width x height grid of weights (row
@@ -52,8 +56,18 @@ class Distribution2D {
   // Maps u in [0, 1)^2 to (x, y) in [0, 1)^2 with density pdf(x, y) (w.r.t. area).
   Vec2 sample(const Vec2& u, float* pdf) const;
   float pdf(const Vec2& p) const;
+  void prefetch(const Vec2& p) const { rows_[row_of(p.y())].prefetch(p.x()); }
+
+  // The two halves of sample(), for callers that interleave many samples: choose the
+  // row, prefetch_in_row() so the row's table loads while other samples choose theirs,
+  // then sample within the row. sample() is exactly these three steps.
+  float sample_row(float u, float* pdf, int* row) const { return marginal_.sample(u, pdf, row); }
+  void prefetch_in_row(int row, float u) const { rows_[row].prefetch(u); }
+  float sample_in_row(int row, float u, float* pdf) const { return rows_[row].sample(u, pdf, nullptr); }
 
  private:
+  int row_of(float y) const { return std::clamp(static_cast<int>(y * height_), 0, height_ - 1); }
+
   int width_, height_;
   std::vector<Distribution1D> rows_;
   Distribution1D marginal_;

@@ -126,6 +126,38 @@ void expect_estimators_agree(const Environment& env, const char* label) {
   EXPECT_LT(mis_error[0], 1.5 * std::min(bsdf_error[0], light_error[0]) + 1e-6) << label;
 }
 
+TEST(PathTracer, ConvexShortcutAgreesWithTheGeneralPathTracer) {
+  // The single-sphere estimator (mirror split off, no shadow rays, batched) against the
+  // general path tracer on the same scene: both unbiased, so equal within noise.
+  const Environment office(make_procedural_environment("office", 256, 128), {.rotation_degrees = 40});
+  const Scene scene = sphere_scene(0.0452f, RGB(0.9765f, 0.0186f, 0.2f));
+  const PinholeCamera camera = front_camera(24);
+  const RayTracer tracer(scene);
+  const auto pixels = interior_pixels(camera, 0.95f);
+  std::array<std::vector<RGBd>, 2> means;
+  for (int shortcut = 0; shortcut < 2; ++shortcut) {
+    PathTracerOptions options;
+    options.convex_shortcut = shortcut == 1;
+    const PathTracer path_tracer(scene, tracer, office, options);
+    EXPECT_EQ(path_tracer.max_depth(), shortcut ? 1 : 8);
+    for (int seed = 0; seed < 8; ++seed) {
+      const Image image = render(path_tracer, camera, {16, 0.0, uint64_t(seed), 0, false}).image;
+      RGBd sum = RGBd::Zero();
+      for (const auto& [x, y] : pixels) sum += image.at(x, y).cast<double>();
+      means[shortcut].push_back(sum / pixels.size());
+    }
+  }
+  RGBd mean[2], error[2];
+  for (int i = 0; i < 2; ++i) {
+    mean[i] = error[i] = RGBd::Zero();
+    for (const RGBd& m : means[i]) mean[i] += m / 8.0;
+    for (const RGBd& m : means[i]) error[i] += (m - mean[i]) * (m - mean[i]) / (7.0 * 8.0);
+    error[i] = error[i].sqrt();
+  }
+  for (int c = 0; c < 3; ++c)
+    EXPECT_LT(std::abs(mean[0][c] - mean[1][c]), 3 * std::hypot(error[0][c], error[1][c]) + 1e-6) << "channel " << c;
+}
+
 TEST(PathTracer, EstimatorsAgreeInTheOffice) {
   expect_estimators_agree(Environment(make_procedural_environment("office", 512, 256), {}), "office");
 }
