@@ -8,6 +8,7 @@
 #include "renderer/sh.h"
 
 #include <benchmark/benchmark.h>
+#include <array>
 #include <tbb/parallel_for.h>
 
 namespace glaze {
@@ -42,6 +43,30 @@ void BM_EnvironmentSample10M(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * int64_t(kSamples));
 }
 BENCHMARK(BM_EnvironmentSample10M)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same through the batched interface the path tracer uses (16 at a time).
+void BM_EnvironmentSampleBatched10M(benchmark::State& state) {
+  const Environment env(office_map(), {});
+  env.sample(Vec2(0.5f, 0.5f));
+  constexpr int kSamples = 10'000'000, kChunk = 1 << 16, kBatch = 16;
+  for (auto _ : state) {
+    tbb::parallel_for(0, (kSamples + kChunk - 1) / kChunk, [&](int chunk) {
+      Pcg32 rng(1, chunk);
+      std::array<Vec2, kBatch> u;
+      std::array<EnvironmentSample, kBatch> out;
+      float sum = 0.0f;
+      const int end = std::min(kSamples, (chunk + 1) * kChunk);
+      for (int k = chunk * kChunk; k < end; k += kBatch) {
+        for (Vec2& v : u) v = Vec2(rng.next_float(), rng.next_float());
+        env.sample(u, out);
+        for (const EnvironmentSample& s : out) sum += s.pdf;
+      }
+      benchmark::DoNotOptimize(sum);
+    });
+  }
+  state.SetItemsProcessed(state.iterations() * int64_t(kSamples));
+}
+BENCHMARK(BM_EnvironmentSampleBatched10M)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_EnvironmentEval(benchmark::State& state) {
   const Environment env(office_map(), {});
