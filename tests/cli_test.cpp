@@ -7,42 +7,17 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <fstream>
 
 namespace glaze {
 namespace {
 
-struct CommandResult {
-  int exit_code;
-  bool crashed;
-  std::string out, err;
-};
+using testing::CommandResult;
+using testing::expect_clear_failure;
 
 CommandResult glaze(const std::string& arguments, const testing::TemporaryDirectory& dir) {
-  const std::string err_file = dir.file("stderr.txt");
-  const std::string command = std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
-  FILE* pipe = popen(command.c_str(), "r");
-  CommandResult run{};
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.crashed = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) >= 128);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream stream(err_file);
-  run.err.assign(std::istreambuf_iterator<char>(stream), {});
-  return run;
-}
-
-void expect_clear_failure(const CommandResult& run, const std::string& must_mention) {
-  EXPECT_FALSE(run.crashed) << run.err;
-  EXPECT_EQ(run.exit_code, 1) << run.err;
-  EXPECT_NE(run.err.find("glaze: error:"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find(must_mention), std::string::npos) << run.err;
+  return testing::run_glaze(arguments, dir);
 }
 
 TEST(Cli, ShPrintsJsonWithTheRequestedBand) {

@@ -16,7 +16,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
@@ -196,27 +195,8 @@ double srgb_decode(int byte) {
 
 // --- Running the command (as cli_test.cpp does). ---
 
-struct CommandResult {
-  int exit_code;
-  bool crashed;
-  std::string out, err;
-};
-
-CommandResult run_glaze(const std::string& arguments, const testing::TemporaryDirectory& dir) {
-  const std::string err_file = dir.file("stderr.txt");
-  const std::string command = std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
-  FILE* pipe = popen(command.c_str(), "r");
-  CommandResult run{};
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.out.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.crashed = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) >= 128);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream stream(err_file);
-  run.err.assign(std::istreambuf_iterator<char>(stream), {});
-  return run;
-}
+using testing::CommandResult;
+using testing::run_glaze;
 
 // `text` with the temporary directory's path replaced by "DIR", so that a word cannot be
 // found in the path (the test's name, the process id) instead of in the message.

@@ -5,10 +5,14 @@
 #include "renderer/error.h"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -65,6 +69,39 @@ class CapturedWarnings {
  private:
   WarningSink previous_;
 };
+
+// The result of running the glaze command.
+struct CommandResult {
+  int exit_code;
+  bool crashed;  // killed by a signal (or a shell-reported one)
+  std::string out, err;
+};
+
+// Runs `glaze ARGUMENTS` (the build's executable), capturing stdout and stderr.
+inline CommandResult run_glaze(const std::string& arguments, const TemporaryDirectory& dir) {
+  const std::string err_file = dir.file("stderr.txt");
+  const std::string command = std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
+  FILE* pipe = popen(command.c_str(), "r");
+  CommandResult run{};
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.out.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.crashed = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) >= 128);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream stream(err_file);
+  run.err.assign(std::istreambuf_iterator<char>(stream), {});
+  return run;
+}
+
+// A failure as users should meet it: exit status 1, no crash, "glaze: error:" and a
+// message that mentions `must_mention`.
+inline void expect_clear_failure(const CommandResult& run, const std::string& must_mention) {
+  EXPECT_FALSE(run.crashed) << run.err;
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("glaze: error:"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find(must_mention), std::string::npos) << run.err;
+}
 
 // Upper tail probability of the chi-square distribution (regularised incomplete gamma
 // Q(k/2, x/2) by its series / continued fraction, Numerical Recipes style).
