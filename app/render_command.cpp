@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <set>
 #include <iostream>
 #include <sstream>
 
@@ -98,18 +99,23 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   } else {
     object = {{"gltf", std::filesystem::absolute(scene.path).string()}};
   }
-  // The environment, as a file next to the captures when it is procedural.
+  // The environment: a procedural one is written beside the captures (and named
+  // relative to each transforms.json), a file is named by its absolute path.
   nlohmann::json environment_entry = environment_json(job.environment_spec);
-  if (job.environment_spec.source.starts_with("procedural:")) {
-    write_image((root / "environment.exr").string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
-    environment_entry["file"] = "environment.exr";
-    environment_entry["procedural"] = job.environment_spec.source.substr(11);
-  } else {
-    environment_entry["file"] = std::filesystem::absolute(job.environment_spec.source).string();
+  const bool procedural = job.environment_spec.source.starts_with("procedural:");
+  const std::filesystem::path environment_file =
+      procedural ? std::filesystem::absolute(root / "environment.exr") : std::filesystem::absolute(job.environment_spec.source);
+  if (procedural) {
+    write_image(environment_file.string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
+    environment_entry["procedural"] = job.environment_spec.source.substr(std::string("procedural:").size());
   }
+  // The material, when the object has exactly one.
   nlohmann::json material;
-  if (scene.materials.size() == 1 || (scene.is_single_convex_object())) {
-    const SceneMaterial& m = scene.materials[scene.is_single_convex_object() ? scene.spheres.front().material : 0];
+  std::set<int> used;
+  for (const Sphere& s : scene.spheres) used.insert(s.material);
+  for (const TriangleMesh& m : scene.meshes) used.insert(m.material);
+  if (used.size() == 1) {
+    const SceneMaterial& m = scene.materials[*used.begin()];
     material = {{"R0", m.R0}, {"Rd", {m.Rd[0], m.Rd[1], m.Rd[2]}}};
     if (m.texture >= 0) material["texture"] = scene.textures[m.texture].source;
   }
@@ -117,8 +123,8 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   for (bool held_out : {false, true}) {
     CaptureSet set{{}, object, environment_entry, material};
     const std::filesystem::path folder = held_out ? root / "holdout" : root;
-    if (held_out) set.environment["file"] = environment_entry["file"].get<std::string>() == "environment.exr"
-                                                ? "../environment.exr" : environment_entry["file"];
+    set.environment["file"] = procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
+                                         : environment_file.string();
     for (const CameraSpec& spec : scene.cameras) {
       const bool is_holdout = std::find(holdout.begin(), holdout.end(), spec.name) != holdout.end();
       if (is_holdout != held_out) continue;
