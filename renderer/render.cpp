@@ -1,6 +1,7 @@
 #include "renderer/render.h"
 
 #include "renderer/error.h"
+#include "renderer/low_discrepancy.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -9,18 +10,11 @@
 #include <chrono>
 #include <cstdio>
 #include <mutex>
-#include <numeric>
 
 namespace glaze {
 namespace {
 
 constexpr int kTile = 16;
-
-// A random permutation of 0..n-1 (Fisher-Yates).
-void shuffle(std::vector<int>& values, Pcg32& rng) {
-  for (int i = static_cast<int>(values.size()) - 1; i > 0; --i)
-    std::swap(values[i], values[rng.next_uint() % (i + 1)]);
-}
 
 class ProgressBar {
  public:
@@ -64,21 +58,18 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
     arena.execute([&] {
       tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
         const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
-        std::vector<int> strata_x(options.spp), strata_y(options.spp);
         std::vector<Ray> rays(options.spp);
         std::vector<RGB> radiance(options.spp);
         for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
           for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
             const uint64_t pixel = uint64_t(y) * width + x;
-            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), pixel);
-            std::iota(strata_x.begin(), strata_x.end(), 0);
-            std::iota(strata_y.begin(), strata_y.end(), 0);
-            shuffle(strata_x, rng);
-            shuffle(strata_y, rng);
+            // One scramble per pixel for all passes, so that passes continue one sequence.
+            Pcg32 scramble(options.seed, pixel);
+            const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
+            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass) + 1, pixel);
             for (int s = 0; s < options.spp; ++s) {
-              const float fx = (strata_x[s] + rng.next_float()) / options.spp;
-              const float fy = (strata_y[s] + rng.next_float()) / options.spp;
-              rays[s] = camera.generate_ray(x + fx, y + fy);
+              const Vec2 offset = scrambled_sobol_2d(uint32_t(pass * options.spp + s), scramble_x, scramble_y);
+              rays[s] = camera.generate_ray(x + offset.x(), y + offset.y());
             }
             tracer.radiance(rays.data(), options.spp, rng, radiance.data());
             RGBd pixel_sum = RGBd::Zero();

@@ -1,10 +1,11 @@
 // render.h: renders a camera's image with the path tracer, in parallel over tiles.
 //
 // Pixel filter: box. Each pixel is the mean of its samples, placed in the pixel's area
-// by Latin-hypercube stratification (every sample in its own row and column stratum of
-// an N x N grid over the pixel, for any N). Every pixel draws from its own random
-// stream, seeded by (seed, pass, pixel index), so the image depends only on the seed
-// and the number of passes, never on the thread count or the scheduling.
+// by a scrambled (0, 2)-sequence (low_discrepancy.h): for 2^m samples every elementary
+// interval of the pixel holds one, and passes of a time budget continue the sequence.
+// Every pixel draws from its own random streams, seeded by (seed, pass, pixel index),
+// so the image depends only on the seed and the number of passes, never on the thread
+// count or the scheduling.
 #pragma once
 
 #include "renderer/camera.h"

@@ -1,4 +1,5 @@
 // Tests of the quadrature rules and the piecewise-constant distributions.
+#include "renderer/low_discrepancy.h"
 #include "renderer/quadrature.h"
 #include "renderer/rng.h"
 #include "renderer/sampling.h"
@@ -104,6 +105,47 @@ TEST(Distribution2D, PdfIntegratesToOneAndMatchesSamples) {
   }
   for (int i = 0; i < w * h; ++i) expected[i] = n * weights[i] / total;
   EXPECT_GT(testing::chi_square_p_value(observed, expected), 1e-3);
+}
+
+}  // namespace
+}  // namespace glaze
+
+namespace glaze {
+namespace {
+
+TEST(ScrambledSobol, FirstPowerOfTwoPointsFormA02Net) {
+  // For N = 2^m points and every split a + b = m, each of the 2^a x 2^b equal rectangles
+  // of the unit square holds exactly one point, with or without scrambling.
+  Pcg32 rng(5);
+  for (int m : {0, 1, 4, 7, 10}) {
+    const uint32_t n = 1u << m;
+    for (int trial = 0; trial < 3; ++trial) {
+      const uint32_t sx = trial == 0 ? 0 : rng.next_uint(), sy = trial == 0 ? 0 : rng.next_uint();
+      for (int a = 0; a <= m; ++a) {
+        std::vector<int> count(n, 0);
+        for (uint32_t i = 0; i < n; ++i) {
+          const Vec2 p = scrambled_sobol_2d(i, sx, sy);
+          ASSERT_TRUE(p.x() >= 0.0f && p.x() < 1.0f && p.y() >= 0.0f && p.y() < 1.0f);
+          const uint32_t cell = (uint32_t(p.x() * (1u << a)) << (m - a)) | uint32_t(p.y() * (1u << (m - a)));
+          ++count[cell];
+        }
+        for (uint32_t c = 0; c < n; ++c) ASSERT_EQ(count[c], 1) << "m " << m << " a " << a << " cell " << c;
+      }
+    }
+  }
+}
+
+TEST(ScrambledSobol, RandomScramblesAreUniformOnAverage) {
+  // Each point of a randomly scrambled sequence is uniform: the mean of point i over
+  // many scrambles approaches (1/2, 1/2).
+  Pcg32 rng(6);
+  for (uint32_t i : {0u, 1u, 5u, 100u}) {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    const int trials = 20000;
+    for (int t = 0; t < trials; ++t) mean += scrambled_sobol_2d(i, rng.next_uint(), rng.next_uint()).cast<double>() / trials;
+    EXPECT_NEAR(mean.x(), 0.5, 0.01);
+    EXPECT_NEAR(mean.y(), 0.5, 0.01);
+  }
 }
 
 }  // namespace
