@@ -55,7 +55,10 @@ options of `render`:
   --estimator E       direct light: mis (default), bsdf or environment
   --env ENV           replace the scene's environment
   --env-scale S, --env-rotation DEG   adjust it
-  --integrator path   the Monte-Carlo path tracer
+  --integrator path   the Monte-Carlo path tracer (default)
+  --integrator sh     the analytic SH shading model (DESIGN section 2), no noise:
+    --lmax N          SH band limit of the diffuse term (default 4)
+    --ss K            K x K sub-pixel samples (default 2)
 )";
 
 EnvironmentOptions environment_options(const Arguments& args) {

@@ -8,11 +8,14 @@
 #include "renderer/ray_tracer.h"
 #include "renderer/render.h"
 #include "renderer/scene.h"
+#include "renderer/sh_integrator.h"
 
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <iostream>
 #include <sstream>
@@ -62,25 +65,42 @@ std::vector<std::string> split_names(const std::string& text) {
 struct Job {
   const Scene& scene;
   const EnvironmentSpec& environment_spec;
+  const Environment& environment;
+  const RayTracer& ray_tracer;
   const PathTracer& tracer;
   RenderOptions options;
+  std::optional<ShIntegratorOptions> sh;  // set: the sh integrator, else the path tracer
   std::optional<std::pair<int, int>> resolution;
 
   void render_to(const CameraSpec& spec, const std::string& path) const {
     const PinholeCamera camera = scene.make_camera(spec, resolution);
     if (options.progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
-    const RenderResult result = render(tracer, camera, options);
-    write_image(path, result.image,
-                {{"glaze:integrator", "path"},
-                 {"glaze:spp", std::to_string(result.spp)},
-                 {"glaze:seconds", std::to_string(result.seconds)},
-                 {"glaze:seed", std::to_string(options.seed)},
-                 {"glaze:max_depth", std::to_string(tracer.max_depth())},
-                 {"glaze:camera", spec.name},
-                 {"glaze:scene", scene.path},
-                 {"glaze:environment", environment_spec.source},
-                 {"glaze:materials", materials_json(scene)}});
-    std::cerr << "wrote " << path << " (" << result.spp << " spp, " << result.seconds << " s)\n";
+    std::map<std::string, std::string> metadata = {{"glaze:camera", spec.name},
+                                                   {"glaze:scene", scene.path},
+                                                   {"glaze:environment", environment_spec.source},
+                                                   {"glaze:materials", materials_json(scene)}};
+    const auto start = std::chrono::steady_clock::now();
+    Image image;
+    std::string summary;
+    if (sh) {
+      image = render_sh(scene, ray_tracer, environment, camera, *sh);
+      metadata["glaze:integrator"] = "sh";
+      metadata["glaze:lmax"] = std::to_string(sh->lmax);
+      metadata["glaze:ss"] = std::to_string(sh->supersampling);
+      summary = "sh, lmax " + std::to_string(sh->lmax) + ", ss " + std::to_string(sh->supersampling);
+    } else {
+      RenderResult result = render(tracer, camera, options);
+      image = std::move(result.image);
+      metadata["glaze:integrator"] = "path";
+      metadata["glaze:spp"] = std::to_string(result.spp);
+      metadata["glaze:seed"] = std::to_string(options.seed);
+      metadata["glaze:max_depth"] = std::to_string(tracer.max_depth());
+      summary = std::to_string(result.spp) + " spp";
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    metadata["glaze:seconds"] = std::to_string(seconds);
+    write_image(path, image, metadata);
+    std::cerr << "wrote " << path << " (" << summary << ", " << seconds << " s)\n";
   }
 };
 
@@ -141,11 +161,14 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 
 int command_render(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"camera", "res", "spp", "time-budget", "seed", "threads", "integrator", "max-depth", "env",
-                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout"});
+                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss"});
   if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
     throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
   const std::string integrator = args.text("integrator", "path");
-  if (integrator != "path") throw Error("unknown integrator '" + integrator + "' (known: path)");
+  if (integrator != "path" && integrator != "sh") throw Error("unknown integrator '" + integrator + "' (known: path, sh)");
+  if (integrator != "sh" && (args.has("lmax") || args.has("ss"))) throw Error("--lmax and --ss apply to --integrator sh");
+  if (integrator == "sh" && (args.has("spp") || args.has("time-budget") || args.has("estimator") || args.has("max-depth")))
+    throw Error("--spp, --time-budget, --estimator and --max-depth apply to --integrator path");
   if (args.has("holdout") && !args.has("captures")) throw Error("--holdout applies to --captures");
 
   const Scene scene = load_scene(args.positionals()[0]);
@@ -169,7 +192,15 @@ int command_render(const std::vector<std::string>& raw) {
   if (args.has("time-budget") && !args.has("spp")) options.spp = 4;  // samples per pass
 
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  const Job job{scene, spec, tracer, options,
+  std::optional<ShIntegratorOptions> sh;
+  if (integrator == "sh") {
+    sh.emplace();
+    sh->lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
+    sh->supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
+    sh->black_background = args.has("captures");
+    sh->threads = options.threads;
+  }
+  const Job job{scene, spec, environment, ray_tracer, tracer, options, sh,
                 args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt};
 
   if (args.has("captures")) {

@@ -77,6 +77,24 @@ TEST(Cli, NonTwoToOneMapWarnsButWorks) {
   EXPECT_NE(run.err.find("not 2:1"), std::string::npos) << run.err;
 }
 
+TEST(Cli, RenderWithTheShIntegrator) {
+  testing::TemporaryDirectory dir;
+  const std::string scenes = std::string(GLAZE_SOURCE_DIR) + "/scenes/";
+  const CommandResult run = glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 6 --ss 2 --res 32x32 --out " + dir.file("sh.exr"), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const Image image = read_image(dir.file("sh.exr"));
+  EXPECT_EQ(image.width, 32);
+  EXPECT_GT(image.at(16, 16)[0], image.at(16, 16)[1]);  // a red sphere
+  // Not a single convex object: rendered, with a warning that occlusion is ignored.
+  const CommandResult still = glaze("render " + scenes + "still_life_office.gltf --integrator sh --res 32x24 --out " + dir.file("still.exr"), dir);
+  EXPECT_EQ(still.exit_code, 0) << still.err;
+  EXPECT_NE(still.err.find("occlusion"), std::string::npos) << still.err;
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 99 --out " + dir.file("x.exr"), dir), "--lmax");
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --spp 4 --out " + dir.file("x.exr"), dir), "--spp");
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --lmax 4 --out " + dir.file("x.exr"), dir), "--lmax");
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator photon --out " + dir.file("x.exr"), dir), "photon");
+}
+
 TEST(Cli, DemoRunsOnTheEmbeddedDefault) {
   testing::TemporaryDirectory dir;
   const CommandResult run = glaze("demo", dir);
