@@ -63,10 +63,11 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
         for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
           for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
             const uint64_t pixel = uint64_t(y) * width + x;
-            // One scramble per pixel for all passes, so that passes continue one sequence.
-            Pcg32 scramble(options.seed, pixel);
+            // Two streams per pixel (PCG sequences 2p and 2p + 1): the scramble, one for
+            // all passes so that passes continue one sequence, and the path samples.
+            Pcg32 scramble(options.seed, 2 * pixel);
             const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
-            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass) + 1, pixel);
+            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * pixel + 1);
             for (int s = 0; s < options.spp; ++s) {
               const Vec2 offset = scrambled_sobol_2d(uint32_t(pass * options.spp + s), scramble_x, scramble_y);
               rays[s] = camera.generate_ray(x + offset.x(), y + offset.y());
