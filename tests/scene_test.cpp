@@ -510,6 +510,16 @@ json camera_scene(const json& film = nullptr) {
 
 // No film: 512 high with aspect 2 -> 1024 x 512; fl_y = (512/2)/tan(30 deg) = 256 sqrt(3)
 // = 443.405; square pixels; principal point at the centre (512, 256).
+void expect_intrinsics(const PinholeCamera& camera, int width, int height, float focal, float cx, float cy,
+                       float focal_tolerance, float centre_tolerance) {
+  EXPECT_EQ(camera.width, width);
+  EXPECT_EQ(camera.height, height);
+  EXPECT_NEAR(camera.fl_y, focal, focal_tolerance);
+  EXPECT_NEAR(camera.fl_x, focal, focal_tolerance);  // square pixels
+  EXPECT_NEAR(camera.cx, cx, centre_tolerance);
+  EXPECT_NEAR(camera.cy, cy, centre_tolerance);
+}
+
 TEST(SceneCameras, DefaultFilmIs512HighWithTheCameraAspect) {
   testing::TemporaryDirectory dir;
   const Scene scene = load_scene(write_gltf(dir, "camera.gltf", camera_scene()));
@@ -517,13 +527,8 @@ TEST(SceneCameras, DefaultFilmIs512HighWithTheCameraAspect) {
   const CameraSpec& spec = scene.camera("front");
   EXPECT_NEAR(spec.yfov, kPi / 3.0f, 1e-6f);
   EXPECT_NEAR(spec.aspect, 2.0f, 1e-6f);
-  const PinholeCamera camera = scene.make_camera(spec, std::nullopt);
-  EXPECT_EQ(camera.width, 1024);
-  EXPECT_EQ(camera.height, 512);
-  EXPECT_NEAR(camera.fl_y, 256.0f * std::sqrt(3.0f), 1e-3f);
-  EXPECT_NEAR(camera.fl_x, 256.0f * std::sqrt(3.0f), 1e-3f);
-  EXPECT_NEAR(camera.cx, 512.0f, 1e-4f);
-  EXPECT_NEAR(camera.cy, 256.0f, 1e-4f);
+  expect_intrinsics(scene.make_camera(spec, std::nullopt), 1024, 512, 256.0f * std::sqrt(3.0f), 512.0f, 256.0f,
+                    1e-3f, 1e-4f);
 }
 
 // film {200, 100}: that size, fl_y = 50/tan(30 deg) = 50 sqrt(3); a resolution argument
@@ -532,20 +537,10 @@ TEST(SceneCameras, SceneFilmAndResolutionArgumentSetTheSize) {
   testing::TemporaryDirectory dir;
   const Scene scene = load_scene(write_gltf(dir, "film.gltf", camera_scene({{"width", 200}, {"height", 100}})));
   ASSERT_TRUE(scene.film.has_value());
-  const PinholeCamera film = scene.make_camera(scene.camera("front"), std::nullopt);
-  EXPECT_EQ(film.width, 200);
-  EXPECT_EQ(film.height, 100);
-  EXPECT_NEAR(film.fl_y, 50.0f * std::sqrt(3.0f), 1e-4f);
-  EXPECT_NEAR(film.cx, 100.0f, 1e-5f);
-  EXPECT_NEAR(film.cy, 50.0f, 1e-5f);
-
-  const PinholeCamera res = scene.make_camera(scene.camera("front"), std::pair{64, 48});
-  EXPECT_EQ(res.width, 64);
-  EXPECT_EQ(res.height, 48);
-  EXPECT_NEAR(res.fl_y, 24.0f * std::sqrt(3.0f), 1e-4f);
-  EXPECT_NEAR(res.fl_x, 24.0f * std::sqrt(3.0f), 1e-4f);
-  EXPECT_NEAR(res.cx, 32.0f, 1e-5f);
-  EXPECT_NEAR(res.cy, 24.0f, 1e-5f);
+  expect_intrinsics(scene.make_camera(scene.camera("front"), std::nullopt), 200, 100, 50.0f * std::sqrt(3.0f), 100.0f,
+                    50.0f, 1e-4f, 1e-5f);
+  expect_intrinsics(scene.make_camera(scene.camera("front"), std::pair{64, 48}), 64, 48, 24.0f * std::sqrt(3.0f), 32.0f,
+                    24.0f, 1e-4f, 1e-5f);
 }
 
 // Rays of "front" (pose Ry(90): camera x -> world (0,0,-1), y -> (0,1,0), z -> (1,0,0)):
