@@ -32,6 +32,8 @@ usage:
   glaze render SCENE [options] --out FILE.exr|DIR
   glaze render SCENE --captures DIR [--holdout NAME,...] [options]
                                  path-trace a glTF scene's cameras / a capture set
+  glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR
+                                 error against run time: path tracer and sh integrator
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -59,6 +61,16 @@ options of `render`:
   --integrator sh     the analytic SH shading model (DESIGN section 2), no noise:
     --lmax N          SH band limit of the diffuse term (default 4)
     --ss K            K x K sub-pixel samples (default 2)
+
+options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
+  --ref-spp N         path-trace the reference at N spp, in two halves whose
+                      difference measures its noise (default 16384)
+  --ref FILE.exr      use this reference instead (its noise is then unknown)
+  --max-spp N         path tracer at 1, 2, 4, ... N spp (default ref-spp / 16)
+  Writes DIR/convergence.csv (seconds, relative RMSE, max error, RMSE beyond the
+  reference noise), split.csv (sh error from SH truncation and from anti-aliasing,
+  kernel energy kept per lmax), summary.json (time to 1% and 0.3%) and
+  convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12 x ss 1, 2, 4.
 )";
 
 EnvironmentOptions environment_options(const Arguments& args) {
@@ -162,6 +174,7 @@ int run(const std::vector<std::string>& args) {
   if (command == "sh") return command_sh(rest);
   if (command == "env") return command_env(rest);
   if (command == "render") return command_render(rest);
+  if (command == "convergence") return command_convergence(rest);
   throw Error("unknown command '" + command + "' (see `glaze help`)");
 }
 

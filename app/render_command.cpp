@@ -2,6 +2,7 @@
 // set (DESIGN §4) for the inverse module.
 #include "app/arguments.h"
 #include "app/commands.h"
+#include "app/scene_options.h"
 #include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/path_tracer.h"
@@ -22,21 +23,6 @@
 
 namespace glaze {
 namespace {
-
-// The scene's environment with the command line's overrides applied.
-EnvironmentSpec environment_spec(const Scene& scene, const Arguments& args) {
-  EnvironmentSpec spec;
-  if (args.has("env")) {
-    spec.source = args.text("env", "");
-  } else if (scene.environment) {
-    spec = *scene.environment;
-  } else {
-    throw Error(scene.path + ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or --env procedural:office");
-  }
-  spec.options.scale = args.real("env-scale", spec.options.scale);
-  spec.options.rotation_degrees = args.real("env-rotation", spec.options.rotation_degrees);
-  return spec;
-}
 
 nlohmann::json environment_json(const EnvironmentSpec& spec) {
   nlohmann::json rows = nlohmann::json::array();

@@ -26,13 +26,14 @@
 namespace glaze {
 
 // g(mu) = 1 - (1 - mu)^5 in Horner form: the direct form cancels catastrophically for
-// small mu in float. mu is clamped to [0, 1].
+// small mu in float. mu is clamped to [0, 1], and so is g: rounding near mu = 1 can
+// give 1 + ulp, which would make the Fresnel term of R0 = 0 slightly negative.
 template <typename T>
 T coat_transmittance_g(T mu) {
   using std::max;
   using std::min;
   mu = min(max(mu, T(0)), T(1));
-  return mu * (T(5) + mu * (T(-10) + mu * (T(10) + mu * (T(-5) + mu))));
+  return min(mu * (T(5) + mu * (T(-10) + mu * (T(10) + mu * (T(-5) + mu)))), T(1));
 }
 
 // Schlick Fresnel F(mu) = R0 + (1 - R0)(1 - mu)^5 = 1 - (1 - R0) g(mu), mu clamped.

@@ -31,6 +31,11 @@ double intersect_sphere(const Sphere& sphere, const Vec3& origin, const Vec3& di
   return std::nan("");
 }
 
+// The outward normal, unnormalised, at distance t along the ray: p - c, in double.
+Vec3 sphere_hit_normal(const Sphere& sphere, const Vec3& origin, const Vec3& direction, double t) {
+  return (origin.cast<double>() + t * direction.cast<double>() - sphere.center.cast<double>()).cast<float>();
+}
+
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
   const Sphere& s = (*spheres)[args->primID];
@@ -49,7 +54,7 @@ void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
   const double t = intersect_sphere(s, origin, direction, ray.tnear, ray.tfar);
   if (std::isnan(t)) return;
   ray.tfar = static_cast<float>(t);
-  const Vec3 n = (origin.cast<double>() + t * direction.cast<double>() - s.center.cast<double>()).cast<float>();
+  const Vec3 n = sphere_hit_normal(s, origin, direction, t);
   rayhit->hit.Ng_x = n.x();
   rayhit->hit.Ng_y = n.y();
   rayhit->hit.Ng_z = n.z();
@@ -106,6 +111,7 @@ RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
   }
   rtcCommitScene(rtc_scene_);
   check_device(device_, "build the scene");
+  lone_sphere_ = scene.meshes.empty() && scene.spheres.size() == 1;
 }
 
 RayTracer::~RayTracer() {
@@ -114,29 +120,48 @@ RayTracer::~RayTracer() {
 }
 
 std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distance) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rayhit{};
-  rayhit.ray.org_x = ray.origin.x();
-  rayhit.ray.org_y = ray.origin.y();
-  rayhit.ray.org_z = ray.origin.z();
-  rayhit.ray.dir_x = ray.direction.x();
-  rayhit.ray.dir_y = ray.direction.y();
-  rayhit.ray.dir_z = ray.direction.z();
-  rayhit.ray.tnear = 0.0f;
-  rayhit.ray.tfar = max_distance;
-  rayhit.ray.mask = ~0u;
-  rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(rtc_scene_, &context, &rayhit);
-  if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  float distance;
+  unsigned geometry, primitive;
+  Vec3 geometric_normal;  // unnormalised
+  float u = 0.0f, v = 0.0f;
+  if (lone_sphere_) {
+    const Sphere& sphere = scene_.spheres.front();
+    const double t = intersect_sphere(sphere, ray.origin, ray.direction, 0.0, max_distance);
+    if (std::isnan(t)) return std::nullopt;
+    distance = static_cast<float>(t);
+    geometry = sphere_geometry_;
+    primitive = 0;
+    geometric_normal = sphere_hit_normal(sphere, ray.origin, ray.direction, t);
+  } else {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rayhit{};
+    rayhit.ray.org_x = ray.origin.x();
+    rayhit.ray.org_y = ray.origin.y();
+    rayhit.ray.org_z = ray.origin.z();
+    rayhit.ray.dir_x = ray.direction.x();
+    rayhit.ray.dir_y = ray.direction.y();
+    rayhit.ray.dir_z = ray.direction.z();
+    rayhit.ray.tnear = 0.0f;
+    rayhit.ray.tfar = max_distance;
+    rayhit.ray.mask = ~0u;
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rtc_scene_, &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    distance = rayhit.ray.tfar;
+    geometry = rayhit.hit.geomID;
+    primitive = rayhit.hit.primID;
+    geometric_normal = Vec3(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
+    u = rayhit.hit.u;
+    v = rayhit.hit.v;
+  }
 
   SurfaceHit hit;
-  hit.distance = rayhit.ray.tfar;
-  const unsigned geometry = rayhit.hit.geomID, primitive = rayhit.hit.primID;
+  hit.distance = distance;
   if (geometry == sphere_geometry_) {
     const Sphere& sphere = scene_.spheres[primitive];
-    const Vec3 n = Vec3(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z).normalized();
+    const Vec3 n = geometric_normal.normalized();
     hit.position = sphere.center + sphere.radius * n;  // exactly on the surface
     hit.normal = hit.geometric_normal = n;
     hit.uv = direction_to_latlong(sphere.rotation.transpose() * n);
@@ -144,9 +169,9 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
   } else {
     const TriangleMesh& mesh = scene_.meshes[geometry];
     const auto& t = mesh.triangles[primitive];
-    const float u = rayhit.hit.u, v = rayhit.hit.v, w = 1.0f - u - v;
+    const float w = 1.0f - u - v;
     hit.position = ray.origin + hit.distance * ray.direction;
-    hit.geometric_normal = Vec3(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z).normalized();
+    hit.geometric_normal = geometric_normal.normalized();
     const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
     hit.normal = shading.norm() > 0.0f ? shading.normalized() : hit.geometric_normal;
     hit.uv = mesh.uvs.empty() ? Vec2::Zero() : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
@@ -160,6 +185,7 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
 }
 
 bool RayTracer::occluded(const Ray& ray, float max_distance) const {
+  if (lone_sphere_) return !std::isnan(intersect_sphere(scene_.spheres.front(), ray.origin, ray.direction, 0.0, max_distance));
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r{};

@@ -69,7 +69,9 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
             const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
             Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * pixel + 1);
             for (int s = 0; s < options.spp; ++s) {
-              const Vec2 offset = scrambled_sobol_2d(uint32_t(pass * options.spp + s), scramble_x, scramble_y);
+              const Vec2 offset = options.pixel_centres
+                                      ? Vec2(0.5f, 0.5f)
+                                      : scrambled_sobol_2d(uint32_t(pass * options.spp + s), scramble_x, scramble_y);
               rays[s] = camera.generate_ray(x + offset.x(), y + offset.y());
             }
             tracer.radiance(rays.data(), options.spp, rng, radiance.data());

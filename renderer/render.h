@@ -23,6 +23,9 @@ struct RenderOptions {
   uint64_t seed = 0;
   int threads = 0;              // 0: all cores
   bool progress = false;        // a progress bar on stderr
+  // Every sample through the pixel centre: no anti-aliasing, a point-sampled image (what
+  // the sh integrator renders at ss 1), to compare shading models without pixel filtering.
+  bool pixel_centres = false;
 };
 
 struct RenderResult {

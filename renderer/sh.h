@@ -36,8 +36,10 @@ void check_lmax(int lmax);
 // direction d = (x, y, z). Y_lm = sqrt(2) N_l^|m|(z) Re/Im (x + i y)^|m| for m > 0 / m < 0,
 // where N_l^m(z) sin^m(theta) is the normalised associated Legendre function; writing it
 // with (x + i y)^m avoids atan2 and square roots and is exact at the poles.
-template <typename T, typename Visit>
-void for_each_sh(int lmax, T x, T y, T z, Visit&& visit) {
+// `lmax` is an int, or a std::integral_constant when the band limit is known at compile
+// time: the same recurrence then unrolls into straight-line code (ShDiffuseSum's hot path).
+template <typename T, typename Lmax, typename Visit>
+void for_each_sh(Lmax lmax, T x, T y, T z, Visit&& visit) {
   const detail::LegendreTable& table = detail::legendre_table();
   const T sqrt2 = T(1.4142135623730951);
   T diagonal = T(0.28209479177387814);  // N_0^0 = 1 / sqrt(4 pi)
@@ -128,8 +130,11 @@ class ShDiffuseSum {
   RGB operator()(const Vec3& n) const;
 
  private:
+  template <typename Lmax>
+  RGB sum(Lmax lmax, const Vec3& n) const;
+
   int lmax_;
-  std::vector<float> weighted_;  // Lambda_l h_l L_lm, 3 floats per coefficient
+  std::vector<float> weighted_;  // Lambda_l h_l L_lm, channel-major: [c * sh_count(lmax) + index]
 };
 
 }  // namespace glaze

@@ -36,7 +36,11 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
             const float mu = hit->normal.dot(v);
             if (!(mu > 0.0f)) continue;  // shading normal facing away: nothing reflected
             const PolishedMaterial material = scene.material_at(hit->material, hit->uv);
-            sum += polished_radiance(material, mu, environment.eval(reflect(v, hit->normal)), diffuse_sum(hit->normal));
+            // Clamped at zero: a negative truncated sum is SH ringing (a point-like light
+            // seen from its far side), not light. The inverse fits keep it unclamped, where
+            // the model must stay linear in the lighting coefficients.
+            const RGB E = options.clamp_diffuse ? diffuse_sum(hit->normal).max(0.0f) : diffuse_sum(hit->normal);
+            sum += polished_radiance(material, mu, environment.eval(reflect(v, hit->normal)), E);
           }
         }
         image.set(x, y, sum / float(k * k));

@@ -8,7 +8,8 @@
 // noise: K x K sub-pixel samples (centres of a K x K grid, box filter) only against
 // aliasing at silhouettes and in sharp reflections. It is exact for a single convex
 // object under distant light up to the SH truncation of the diffuse term; elsewhere it
-// ignores occlusion and interreflection (glaze warns).
+// ignores occlusion and interreflection (glaze warns). Where the truncated diffuse sum
+// rings below zero (far from a point-like light) it is clamped at zero.
 #pragma once
 
 #include "renderer/camera.h"
@@ -24,6 +25,7 @@ struct ShIntegratorOptions {
   int supersampling = 2;          // K: K x K samples per pixel
   bool black_background = false;  // camera rays that miss return 0
   int threads = 0;                // 0: all cores
+  bool clamp_diffuse = true;      // clamp a negative (ringing) diffuse sum at zero
 };
 
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <map>
+#include <sstream>
 
 namespace glaze {
 namespace {
@@ -93,6 +95,54 @@ TEST(Cli, RenderWithTheShIntegrator) {
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --spp 4 --out " + dir.file("x.exr"), dir), "--spp");
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --lmax 4 --out " + dir.file("x.exr"), dir), "--lmax");
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator photon --out " + dir.file("x.exr"), dir), "photon");
+}
+
+// The study on a tiny frame: every row and file is there, the path tracer's error falls
+// like 1/sqrt(spp) and the sh integrator's with lmax, and the plot has ink on it.
+TEST(Cli, ConvergenceWritesTheStudy) {
+  testing::TemporaryDirectory dir;
+  const std::string scene = std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf";
+  const CommandResult run = glaze("convergence " + scene + " --res 32x32 --ref-spp 512 --max-spp 16 --out " + dir.file("study"), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("relative RMSE 1%"), std::string::npos) << run.out;
+
+  std::map<std::string, double> error;  // setting -> relative RMSE
+  std::ifstream csv(dir.file("study/convergence.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "integrator,setting,seconds,relative_rmse,max_error,relative_rmse_beyond_reference_noise");
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::stringstream fields(line);
+    std::string integrator, setting, seconds, rmse;
+    std::getline(fields, integrator, ',');
+    std::getline(fields, setting, ',');
+    std::getline(fields, seconds, ',');
+    std::getline(fields, rmse, ',');
+    error[setting] = std::stod(rmse);
+    EXPECT_GT(std::stod(seconds), 0.0) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 5 + 15);  // 1..16 spp, 5 lmax x 3 ss
+  EXPECT_LT(error["16 spp"], 0.5 * error["1 spp"]);  // 1/4 expected
+  EXPECT_GT(error["16 spp"], 0.1 * error["1 spp"]);
+  EXPECT_LT(error["lmax 12 ss 4"], error["lmax 2 ss 4"]);
+
+  std::ifstream split(dir.file("study/split.csv"));
+  int split_rows = -1;
+  while (std::getline(split, line)) ++split_rows;
+  EXPECT_EQ(split_rows, 15);
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir.file("study/summary.json")));
+  EXPECT_GT(summary["reference"]["relative_noise"].get<double>(), 0.0);
+  EXPECT_TRUE(summary["time_to"].contains("0.01"));
+  const Image plot = read_image(dir.file("study/convergence.png"));
+  EXPECT_EQ(plot.width, 960);
+  int ink = 0;
+  for (float value : plot.pixels) ink += value < 0.5f;
+  EXPECT_GT(ink, 1000);
+
+  expect_clear_failure(glaze("convergence " + scene + " --res 16x16 --ref " + dir.file("study/reference.exr") + " --out " + dir.file("x"), dir), "--res");
+  expect_clear_failure(glaze("convergence " + scene + " --ref a.exr --ref-spp 8 --out " + dir.file("x"), dir), "--ref");
 }
 
 TEST(Cli, DemoRunsOnTheEmbeddedDefault) {

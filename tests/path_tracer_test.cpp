@@ -16,19 +16,8 @@
 namespace glaze {
 namespace {
 
-Scene sphere_scene(float R0, const RGB& Rd) {
-  Scene scene;
-  scene.path = "test-sphere";
-  scene.materials.push_back({"test", R0, Rd, -1});
-  scene.spheres.push_back({"ball", Vec3::Zero(), 1.0f, 0, Mat3::Identity()});
-  return scene;
-}
-
-PinholeCamera front_camera(int size) {
-  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
-  pose.translation() = Vec3(0, 0, 4);
-  return PinholeCamera::from_vertical_fov("front", pose, 30.0f * kPi / 180.0f, size, size);
-}
+using testing::front_camera;
+using testing::sphere_scene;
 
 // Pixels whose whole footprint lies well inside the sphere's silhouette.
 std::vector<std::pair<int, int>> interior_pixels(const PinholeCamera& camera, float margin = 0.9f) {
@@ -57,7 +46,7 @@ RenderResult render_scene(const Scene& scene, const Environment& env, const Pinh
   options.black_background = true;
   options.max_depth = max_depth;
   const PathTracer path_tracer(scene, tracer, env, options);
-  return render(path_tracer, camera, {spp, 0.0, seed, threads, false});
+  return render(path_tracer, camera, {spp, 0.0, seed, threads, false, false});
 }
 
 TEST(PathTracer, WhiteFurnaceIsExactlyOneWithBsdfSampling) {

@@ -1,8 +1,11 @@
 // test_support.h: helpers shared by the test suites: where the real data lives, a
-// temporary directory, capturing warnings, and a chi-square goodness-of-fit test.
+// temporary directory, capturing warnings, a chi-square goodness-of-fit test, and the
+// unit sphere seen from the front that many renderer tests look at.
 #pragma once
 
+#include "renderer/camera.h"
 #include "renderer/error.h"
+#include "renderer/scene.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -17,6 +20,22 @@
 #include <vector>
 
 namespace glaze::testing {
+
+// One unit sphere at the origin with material (R0, Rd).
+inline Scene sphere_scene(float R0, const RGB& Rd) {
+  Scene scene;
+  scene.path = "test-sphere";
+  scene.materials.push_back({"test", R0, Rd, -1});
+  scene.spheres.push_back({"ball", Vec3::Zero(), 1.0f, 0, Mat3::Identity()});
+  return scene;
+}
+
+// A size x size camera at (0, 0, 4) looking at the origin, 30 degree field of view.
+inline PinholeCamera front_camera(int size) {
+  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+  pose.translation() = Vec3(0, 0, 4);
+  return PinholeCamera::from_vertical_fov("front", pose, 30.0f * kPi / 180.0f, size, size);
+}
 
 // ../shared/data by default (relative to the source tree); GLAZE_DATA_DIR overrides.
 inline std::filesystem::path data_dir() {

@@ -1,0 +1,254 @@
+// convergence_command.cpp: `glaze convergence`: error against run time of the path
+// tracer and of the analytic sh integrator, measured against one converged reference.
+//
+// The reference is the path tracer at --ref-spp, rendered as two independent halves:
+// their mean is the reference and half their difference measures its own noise, so an
+// error can be reported both as measured and beyond that noise (sqrt(e^2 - noise^2):
+// the mean squared differences of independent errors add). Times are wall-clock seconds
+// of the render alone (all threads); for the sh integrator they include the SH
+// projection of the environment for that lmax, which a fresh process pays once.
+#include "app/arguments.h"
+#include "app/commands.h"
+#include "app/plot.h"
+#include "app/scene_options.h"
+#include "renderer/error.h"
+#include "renderer/image_error.h"
+#include "renderer/path_tracer.h"
+#include "renderer/ray_tracer.h"
+#include "renderer/render.h"
+#include "renderer/scene.h"
+#include "renderer/sh_integrator.h"
+
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <thread>
+
+namespace glaze {
+namespace {
+
+constexpr int kShLmax[] = {2, 4, 6, 8, 12};
+constexpr int kShSupersampling[] = {1, 2, 4};
+// Baselines of the sh error split: the truncation error of lmax is its difference from
+// lmax 32 at the same ss, the anti-aliasing error of ss its difference from ss 8 at the
+// same lmax.
+constexpr int kSplitLmax = 32, kSplitSupersampling = 8;
+constexpr double kTargets[] = {0.01, 0.003};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Row {
+  std::string integrator, setting;
+  int lmax = 0, ss = 0;  // sh rows
+  double seconds = 0.0;
+  ImageError error;
+  double beyond_noise = 0.0;
+};
+
+// Time at which the path tracer's error (beyond the reference noise) reaches `target`:
+// interpolated on log-log axes between the rows around it, or extrapolated from the last
+// row at the Monte-Carlo rate (error ~ time^-1/2) when no row reaches it.
+std::pair<double, bool> path_time_to(const std::vector<Row>& rows, double target) {
+  const Row* previous = nullptr;
+  for (const Row& row : rows) {
+    if (row.integrator != "path") continue;
+    if (row.beyond_noise <= target) {
+      if (!previous || previous->beyond_noise <= row.beyond_noise) return {row.seconds, false};
+      const double slope = std::log(row.seconds / previous->seconds) / std::log(row.beyond_noise / previous->beyond_noise);
+      return {previous->seconds * std::pow(target / previous->beyond_noise, slope), false};
+    }
+    previous = &row;
+  }
+  if (!previous) return {NAN, true};
+  return {previous->seconds * std::pow(previous->beyond_noise / target, 2.0), true};
+}
+
+// The fastest sh setting whose error beyond the reference noise is within `target`.
+const Row* fastest_sh_within(const std::vector<Row>& rows, double target) {
+  const Row* best = nullptr;
+  for (const Row& row : rows)
+    if (row.integrator == "sh" && row.beyond_noise <= target && (!best || row.seconds < best->seconds)) best = &row;
+  return best;
+}
+
+}  // namespace
+
+int command_convergence(const std::vector<std::string>& raw) {
+  const Arguments args(raw, {"camera", "res", "ref", "ref-spp", "max-spp", "seed", "threads", "max-depth", "env",
+                             "env-scale", "env-rotation", "out"});
+  if (args.positionals().size() != 1 || !args.has("out"))
+    throw Error("usage: glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR");
+  if (args.has("ref") && args.has("ref-spp")) throw Error("give either --ref FILE.exr or --ref-spp N, not both");
+
+  const Scene scene = load_scene(args.positionals()[0]);
+  const EnvironmentSpec spec = environment_spec(scene, args);
+  const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
+  const RayTracer ray_tracer(scene);
+  if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
+  const PinholeCamera camera = scene.make_camera(scene.camera(args.text("camera", scene.cameras.front().name)),
+                                                 args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt);
+  const std::vector<uint8_t> mask = interior_mask(ray_tracer, camera);
+  const std::filesystem::path out(args.text("out", ""));
+  std::filesystem::create_directories(out);
+
+  PathTracerOptions path_options;
+  path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
+  const PathTracer tracer(scene, ray_tracer, environment, path_options);
+  RenderOptions options;
+  options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
+  options.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
+
+  // The reference, and its own noise when glaze renders it.
+  Image reference;
+  double reference_noise = 0.0, reference_seconds = 0.0;
+  long reference_spp = 0;
+  if (args.has("ref")) {
+    reference = read_image(args.text("ref", ""));
+    if (reference.width != camera.width || reference.height != camera.height)
+      throw Error(args.text("ref", "") + ": the reference is " + std::to_string(reference.width) + "x" +
+                  std::to_string(reference.height) + " but camera " + camera.name + " renders " +
+                  std::to_string(camera.width) + "x" + std::to_string(camera.height) + " (match it with --res)");
+  } else {
+    reference_spp = args.integer("ref-spp", 16384, 2, 1L << 24);
+    RenderOptions half = options;
+    half.spp = static_cast<int>(reference_spp / 2);
+    half.progress = isatty(STDERR_FILENO);
+    std::cerr << "reference: " << reference_spp << " spp in two halves\n";
+    half.seed = options.seed + 1000003;
+    RenderResult first = render(tracer, camera, half);
+    half.seed = options.seed + 2000003;
+    const RenderResult second = render(tracer, camera, half);
+    reference = first.image;
+    for (size_t i = 0; i < reference.pixels.size(); ++i) reference.pixels[i] = 0.5f * (first.image.pixels[i] + second.image.pixels[i]);
+    reference_noise = 0.5 * image_error(first.image, second.image, mask).relative_rmse;
+    reference_seconds = first.seconds + second.seconds;
+    write_image((out / "reference.exr").string(), reference,
+                {{"glaze:integrator", "path"}, {"glaze:spp", std::to_string(reference_spp)},
+                 {"glaze:seconds", std::to_string(reference_seconds)}, {"glaze:camera", camera.name}});
+  }
+  auto beyond_noise = [&](double error) { return std::sqrt(std::max(0.0, error * error - reference_noise * reference_noise)); };
+
+  std::vector<Row> rows;
+  const long max_spp = args.integer("max-spp", reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024, 1, 1L << 20);
+  for (long spp = 1; spp <= max_spp; spp *= 2) {
+    options.spp = static_cast<int>(spp);
+    const RenderResult result = render(tracer, camera, options);
+    Row row;
+    row.integrator = "path";
+    row.setting = std::to_string(spp) + " spp";
+    row.seconds = result.seconds;
+    row.error = image_error(result.image, reference, mask);
+    row.beyond_noise = beyond_noise(row.error.relative_rmse);
+    rows.push_back(row);
+    std::cerr << "path " << spp << " spp: " << row.seconds << " s, relative RMSE " << row.error.relative_rmse << '\n';
+  }
+
+  ShIntegratorOptions sh_options;
+  sh_options.threads = options.threads;
+  auto render_sh_at = [&](int lmax, int ss) {
+    sh_options.lmax = lmax;
+    sh_options.supersampling = ss;
+    return render_sh(scene, ray_tracer, environment, camera, sh_options);
+  };
+  std::map<int, Image> finest_lmax, finest_ss;  // the split's baselines, by ss and by lmax
+  for (int ss : kShSupersampling) finest_lmax[ss] = render_sh_at(kSplitLmax, ss);
+  for (int lmax : kShLmax) finest_ss[lmax] = render_sh_at(lmax, kSplitSupersampling);
+  std::vector<std::string> split_lines;
+  for (int lmax : kShLmax) {
+    const auto projection_start = std::chrono::steady_clock::now();
+    sh_project_latlong(environment.map(), environment.local_to_world(), lmax);  // what environment.sh() pays once
+    const double projection_seconds = seconds_since(projection_start);
+    for (int ss : kShSupersampling) {
+      const auto start = std::chrono::steady_clock::now();
+      const Image image = render_sh_at(lmax, ss);
+      Row row;
+      row.integrator = "sh";
+      row.setting = "lmax " + std::to_string(lmax) + " ss " + std::to_string(ss);
+      row.lmax = lmax;
+      row.ss = ss;
+      row.seconds = projection_seconds + seconds_since(start);
+      row.error = image_error(image, reference, mask);
+      row.beyond_noise = beyond_noise(row.error.relative_rmse);
+      rows.push_back(row);
+      const double truncation = image_error(image, finest_lmax[ss], mask).relative_rmse;
+      const double antialiasing = image_error(image, finest_ss[lmax], mask).relative_rmse;
+      char line[160];
+      std::snprintf(line, sizeof line, "%d,%d,%.6g,%.6g,%.8f", lmax, ss, truncation, antialiasing,
+                    sh_kernel_energy_fraction(lmax));
+      split_lines.push_back(line);
+    }
+  }
+
+  // convergence.csv, split.csv, summary.json, convergence.png.
+  {
+    std::ofstream csv(out / "convergence.csv");
+    csv << "integrator,setting,seconds,relative_rmse,max_error,relative_rmse_beyond_reference_noise\n";
+    for (const Row& row : rows)
+      csv << row.integrator << ',' << row.setting << ',' << row.seconds << ',' << row.error.relative_rmse << ','
+          << row.error.max_error << ',' << row.beyond_noise << '\n';
+    std::ofstream split(out / "split.csv");
+    split << "lmax,ss,truncation_rmse,antialiasing_rmse,kernel_energy_kept\n";
+    for (const std::string& line : split_lines) split << line << '\n';
+    if (!csv || !split) throw Error(out.string() + ": could not write the CSV files");
+  }
+  nlohmann::json summary = {{"scene", scene.path},
+                            {"camera", camera.name},
+                            {"resolution", {camera.width, camera.height}},
+                            {"interior_pixels", rows.front().error.pixels},
+                            {"reference", {{"spp", reference_spp}, {"seconds", reference_seconds}, {"relative_noise", reference_noise}}}};
+  std::printf("%s, camera %s, %dx%d, %zu interior pixels; reference %ld spp (relative noise %.3g%%)\n", scene.path.c_str(),
+              camera.name.c_str(), camera.width, camera.height, rows.front().error.pixels, reference_spp, 100 * reference_noise);
+  for (double target : kTargets) {
+    const auto [path_seconds, extrapolated] = path_time_to(rows, target);
+    const Row* sh = fastest_sh_within(rows, target);
+    nlohmann::json entry = {{"path_seconds", path_seconds}, {"path_extrapolated", extrapolated}};
+    std::printf("relative RMSE %.2g%%: path tracer %.3g s%s", 100 * target, path_seconds, extrapolated ? " (extrapolated)" : "");
+    if (sh) {
+      entry["sh_seconds"] = sh->seconds;
+      entry["sh_setting"] = sh->setting;
+      entry["speedup"] = path_seconds / sh->seconds;
+      std::printf(", sh %.3g s (%s): %.0fx faster\n", sh->seconds, sh->setting.c_str(), path_seconds / sh->seconds);
+    } else {
+      entry["sh_seconds"] = nullptr;
+      std::printf(", sh: no setting reaches it\n");
+    }
+    char key[16];
+    std::snprintf(key, sizeof key, "%g", target);
+    summary["time_to"][key] = entry;
+  }
+  {
+    std::ofstream file(out / "summary.json");
+    file << summary.dump(2) << '\n';
+    if (!file) throw Error((out / "summary.json").string() + ": could not be written");
+  }
+
+  LogLogPlot plot{"Relative RMSE against run time: " + std::filesystem::path(scene.path).filename().string() + ", " +
+                      std::to_string(camera.width) + "x" + std::to_string(camera.height),
+                  "seconds (" + std::to_string(options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency())) + " threads)", "relative RMSE over the object", {}, {}};
+  PlotSeries path_series{"path tracer", {}, {}, RGB(0.1f, 0.3f, 0.8f)};
+  for (const Row& row : rows)
+    if (row.integrator == "path") path_series.x.push_back(row.seconds), path_series.y.push_back(row.error.relative_rmse);
+  plot.series.push_back(path_series);
+  const RGB sh_colours[] = {RGB(0.9f, 0.5f, 0.1f), RGB(0.8f, 0.1f, 0.1f), RGB(0.2f, 0.6f, 0.2f)};
+  for (size_t k = 0; k < std::size(kShSupersampling); ++k) {
+    PlotSeries series{"sh, ss " + std::to_string(kShSupersampling[k]) + ", lmax 2..12", {}, {}, sh_colours[k]};
+    for (const Row& row : rows)
+      if (row.integrator == "sh" && row.ss == kShSupersampling[k]) series.x.push_back(row.seconds), series.y.push_back(row.error.relative_rmse);
+    plot.series.push_back(series);
+  }
+  plot.lines = {{0.01, "1%"}, {0.003, "0.3%"}};
+  if (reference_noise > 0.0) plot.lines.push_back({reference_noise, "reference noise"});
+  write_loglog_plot((out / "convergence.png").string(), plot);
+  std::cerr << "wrote " << (out / "convergence.csv").string() << ", split.csv, summary.json, convergence.png\n";
+  return 0;
+}
+
+}  // namespace glaze

@@ -1,0 +1,180 @@
+// Acceptance of the sh integrator (DESIGN §2) against converged path-traced references
+// of the red sphere scene, in the procedural office and blue room and under real maps.
+//
+// Both images are point-sampled at pixel centres (RenderOptions::pixel_centres, ss 1),
+// so that the comparison measures the shading model and not pixel filtering (the
+// anti-aliasing part of the sh error is measured by `glaze convergence`). The reference
+// is two independent path-traced halves: their mean is the reference, half their
+// difference its noise, which is taken out of the measured error (independent errors add
+// in the mean square). What is left is the SH truncation of the diffuse term.
+#include "renderer/environment.h"
+#include "renderer/image_error.h"
+#include "renderer/path_tracer.h"
+#include "renderer/ray_tracer.h"
+#include "renderer/render.h"
+#include "renderer/scene.h"
+#include "renderer/rng.h"
+#include "renderer/sh.h"
+#include "renderer/sh_integrator.h"
+#include "renderer/shading.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace glaze {
+namespace {
+
+struct ModelErrors {
+  double noise;                   // relative RMSE of the path-traced reference itself
+  std::map<int, double> by_lmax;  // sh error beyond that noise
+  double truncation4;             // sh at lmax 4 against sh at lmax 32
+  double unclamped4;              // sh error at lmax 4 without clamping negative diffuse sums
+};
+
+ModelErrors measure(const std::string& environment_spec) {
+  const Scene scene = load_scene(std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf");
+  const Environment environment = make_environment(environment_spec);
+  const RayTracer tracer(scene);
+  const PinholeCamera camera = scene.make_camera(scene.camera("view_0"), std::pair(96, 96));
+  const std::vector<uint8_t> mask = interior_mask(tracer, camera);
+  PathTracerOptions path_options;
+  path_options.black_background = true;
+  const PathTracer path_tracer(scene, tracer, environment, path_options);
+  RenderOptions options;
+  options.spp = 1024;
+  options.pixel_centres = true;
+  options.seed = 11;
+  const Image first = render(path_tracer, camera, options).image;
+  options.seed = 12;
+  const Image second = render(path_tracer, camera, options).image;
+  Image reference = first;
+  for (size_t i = 0; i < reference.pixels.size(); ++i) reference.pixels[i] = 0.5f * (first.pixels[i] + second.pixels[i]);
+
+  ModelErrors errors;
+  errors.noise = 0.5 * image_error(first, second, mask).relative_rmse;
+  auto sh = [&](int lmax) { return render_sh(scene, tracer, environment, camera, {lmax, 1, true, 0}); };
+  for (int lmax : {2, 4, 8, 16}) {
+    const double measured = image_error(sh(lmax), reference, mask).relative_rmse;
+    errors.by_lmax[lmax] = std::sqrt(std::max(0.0, measured * measured - errors.noise * errors.noise));
+  }
+  errors.truncation4 = image_error(sh(4), sh(32), mask).relative_rmse;
+  const Image unclamped = render_sh(scene, tracer, environment, camera, {4, 1, true, 0, false});
+  const double measured = image_error(unclamped, reference, mask).relative_rmse;
+  errors.unclamped4 = std::sqrt(std::max(0.0, measured * measured - errors.noise * errors.noise));
+  std::printf("%s: reference noise %.3f%%, sh error beyond it: lmax 2 %.3f%%, 4 %.3f%%, 8 %.3f%%, 16 %.3f%%; "
+              "truncation at lmax 4 (vs lmax 32) %.3f%%, lmax 4 unclamped %.3f%%\n",
+              environment_spec.c_str(), 100 * errors.noise, 100 * errors.by_lmax[2], 100 * errors.by_lmax[4],
+              100 * errors.by_lmax[8], 100 * errors.by_lmax[16], 100 * errors.truncation4, 100 * errors.unclamped4);
+  return errors;
+}
+
+// What holds for any lighting: the path tracer and the SH model agree up to the SH
+// truncation of the diffuse term (which the sh model alone measures against lmax 32),
+// and the error falls with lmax toward the reference's noise.
+void expect_model_agrees_up_to_truncation(const ModelErrors& e) {
+  EXPECT_NEAR(e.by_lmax.at(4), e.truncation4, 0.002 + 0.1 * e.truncation4);
+  EXPECT_LT(e.by_lmax.at(16), 0.004);
+  EXPECT_LE(e.by_lmax.at(8), e.by_lmax.at(2) + 0.001);
+  EXPECT_LE(e.by_lmax.at(16), e.by_lmax.at(4) + 0.001);
+}
+
+TEST(ShIntegratorAcceptance, OfficeWithinOnePercentAtLmax4) {
+  const ModelErrors e = measure("procedural:office");
+  expect_model_agrees_up_to_truncation(e);
+  EXPECT_LT(e.by_lmax.at(4), 0.01);
+}
+
+// The blue room's two projector spots are small and bright: the diffuse response to a
+// near point light has energy far beyond l = 4, and lmax 4 is not within 1% here (the
+// measured figure is printed and reported); lmax 8 is.
+TEST(ShIntegratorAcceptance, BlueRoomWithinOnePercentAtLmax8) {
+  const ModelErrors e = measure("procedural:blue-room");
+  expect_model_agrees_up_to_truncation(e);
+  EXPECT_LT(e.by_lmax.at(8), 0.01);
+}
+
+TEST(ShIntegratorAcceptance, RealMapsAgreeUpToTruncation) {
+  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr", "grace_latlong.exr", "studio_small_03_1k.hdr"}) {
+    GLAZE_REQUIRE_ENVMAP(path, name);
+    SCOPED_TRACE(name);
+    const ModelErrors e = measure(path.string());
+    expect_model_agrees_up_to_truncation(e);
+    EXPECT_LT(e.by_lmax.at(8), 0.01);
+  }
+}
+
+// Stiff cases: a near-mirror, a black base, grazing silhouettes and a 1e5:1 "sun" of one
+// texel. The images stay finite and non-negative; where the truncated SH diffuse sum
+// rings below zero (on the side turned away from the sun), the integrator clamps the
+// irradiance at zero: negative light is truncation, never physics.
+Image sun_map(float contrast) {
+  Image map(64, 32);
+  for (float& value : map.pixels) value = 1.0f;
+  map.set(20, 8, RGB::Constant(contrast));
+  return map;
+}
+
+using testing::front_camera;
+using testing::sphere_scene;
+
+TEST(ShIntegratorStiff, SunRingsBelowZeroAndIsClampedThere) {
+  const Environment sun(sun_map(1e5f), {});
+  const ShDiffuseSum diffuse_sum(sun.sh(4));
+  // The sun's direction, and the sphere of normals: some see a negative truncated sum.
+  const Vec3 towards_sun = sun.uv_to_direction(Vec2(20.5f / 64, 8.5f / 32));
+  int negative = 0, total = 0;
+  Pcg32 rng(3);
+  for (int k = 0; k < 4000; ++k, ++total) {
+    const float z = 2.0f * rng.next_float() - 1.0f, phi = 2.0f * kPi * rng.next_float();
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    negative += diffuse_sum(Vec3(r * std::cos(phi), r * std::sin(phi), z))[0] < 0.0f;
+  }
+  EXPECT_GT(diffuse_sum(towards_sun)[0], 0.0f);
+  EXPECT_GT(negative, total / 50) << "expected SH ringing below zero away from a 1e5:1 sun at lmax 4";
+  std::printf("1e5:1 sun at lmax 4: %.1f%% of normals see a negative truncated diffuse sum\n", 100.0 * negative / total);
+
+  const Scene scene = sphere_scene(0.04f, RGB(0.8f, 0.5f, 0.2f));
+  const RayTracer tracer(scene);
+  const Image image = render_sh(scene, tracer, sun, front_camera(64), {4, 2, true, 0});
+  for (float value : image.pixels) {
+    ASSERT_TRUE(std::isfinite(value));
+    ASSERT_GE(value, 0.0f);
+  }
+}
+
+TEST(ShIntegratorStiff, MirrorBlackBaseAndGrazingViewsStayFinite) {
+  const Environment sun(sun_map(3e5f), {});
+  const PinholeCamera camera = front_camera(64);
+  for (const auto& [R0, Rd] : {std::pair(0.999f, RGB::Zero()), std::pair(0.0f, RGB::Zero()), std::pair(0.04f, RGB::Ones())}) {
+    const Scene scene = sphere_scene(R0, Rd);
+    const RayTracer tracer(scene);
+    const Image image = render_sh(scene, tracer, sun, camera, {4, 4, true, 0});
+    PathTracerOptions path_options;
+    path_options.black_background = true;
+    const PathTracer path_tracer(scene, tracer, sun, path_options);
+    RenderOptions options;
+    options.spp = 16;
+    const Image path = render(path_tracer, camera, options).image;
+    for (size_t i = 0; i < image.pixels.size(); ++i) {
+      ASSERT_TRUE(std::isfinite(image.pixels[i]) && image.pixels[i] >= 0.0f) << "sh, R0 " << R0;
+      ASSERT_TRUE(std::isfinite(path.pixels[i]) && path.pixels[i] >= 0.0f) << "path, R0 " << R0 << " value " << path.pixels[i];
+    }
+    if (Rd.maxCoeff() == 0.0f) {
+      // A black base reflects only the coat's mirror: F(n.v) L(r) at every sample.
+      const int x = 32, y = 32;
+      const Ray ray = camera.generate_ray(x + 0.5f, y + 0.5f);
+      const SurfaceHit hit = *tracer.intersect(ray);
+      const float mu = hit.normal.dot(-ray.direction);
+      const RGB expected = PolishedMaterial(R0, Rd).fresnel(mu) * sun.eval(reflect(-ray.direction, hit.normal));
+      EXPECT_LT((render_sh(scene, tracer, sun, camera, {4, 1, true, 0}).at(x, y) - expected).abs().maxCoeff(),
+                1e-6f * (1.0f + expected.maxCoeff()));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace glaze
