@@ -8,5 +8,6 @@ namespace glaze {
 
 int command_render(const std::vector<std::string>& args);
 int command_convergence(const std::vector<std::string>& args);
+int command_invert_fit(const std::vector<std::string>& args);
 
 }  // namespace glaze

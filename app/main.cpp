@@ -175,6 +175,7 @@ int run(const std::vector<std::string>& args) {
   if (command == "env") return command_env(rest);
   if (command == "render") return command_render(rest);
   if (command == "convergence") return command_convergence(rest);
+  if (command == "invert-fit") return command_invert_fit(rest);
   throw Error("unknown command '" + command + "' (see `glaze help`)");
 }
 

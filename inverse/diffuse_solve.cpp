@@ -10,7 +10,6 @@ DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<
   const size_t count = observed.size();
   if (specular.size() != count || diffuse_basis.size() != count || (!weights.empty() && weights.size() != count))
     throw Error("solve_diffuse_reflectance: sample arrays differ in length");
-  const ParameterSpec& bounds = parameter_spec(MaterialParameter::Rd);
   for (size_t k = 0; k < count; ++k) {
     if (!observed[k].allFinite() || !specular[k].allFinite() || !diffuse_basis[k].allFinite() ||
         (!weights.empty() && !(weights[k] >= 0.0f && std::isfinite(weights[k]))))
@@ -18,18 +17,15 @@ DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<
                   " is not finite or has a negative weight; drop such samples before fitting");
   }
 
-  RGBd numerator = RGBd::Zero(), denominator = RGBd::Zero();
+  DiffuseNormalEquations<double> equations;
   for (size_t k = 0; k < count; ++k) {
     const double w = weights.empty() ? 1.0 : weights[k];
-    const RGBd b = diffuse_basis[k].cast<double>();
-    numerator += w * b * (observed[k] - specular[k]).cast<double>();
-    denominator += w * b * b;
+    for (int c = 0; c < 3; ++c) equations.add<double>(c, w, observed[k][c], specular[k][c], diffuse_basis[k][c]);
   }
   DiffuseSolve result;
   for (int c = 0; c < 3; ++c) {
-    const double minimiser = denominator[c] > 0.0 ? numerator[c] / denominator[c] : 0.0;
-    result.unclamped[c] = static_cast<float>(minimiser);
-    result.Rd[c] = static_cast<float>(std::clamp(minimiser, bounds.lower, bounds.upper));
+    result.unclamped[c] = static_cast<float>(equations.unclamped(c));
+    result.Rd[c] = static_cast<float>(equations.solve(c));
   }
   result.weighted_squared_error = RGBd::Zero();
   for (size_t k = 0; k < count; ++k) {

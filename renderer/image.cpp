@@ -82,8 +82,19 @@ Image read_image_from_memory(const unsigned char* bytes, size_t size, const std:
 }
 
 void write_image(const std::string& path, const Image& image,
-                 const std::map<std::string, std::string>& metadata) {
+                 const std::map<std::string, std::string>& metadata, std::span<const float> alpha) {
   if (image.width <= 0 || image.height <= 0) throw Error(path + ": refusing to write an empty image");
+  const size_t pixels = size_t(image.width) * image.height;
+  if (!alpha.empty() && alpha.size() != pixels) throw Error(path + ": the alpha channel does not match the image size");
+  const int channels = alpha.empty() ? 3 : 4;
+  std::vector<float> interleaved;
+  if (!alpha.empty()) {
+    interleaved.resize(pixels * 4);
+    for (size_t p = 0; p < pixels; ++p) {
+      for (int c = 0; c < 3; ++c) interleaved[4 * p + c] = image.pixels[3 * p + c];
+      interleaved[4 * p + 3] = alpha[p];
+    }
+  }
   const std::filesystem::path target(path);
   std::filesystem::path temporary = target;
   // Same directory (so rename is atomic), same extension (so the format is chosen right).
@@ -95,10 +106,11 @@ void write_image(const std::string& path, const Image& image,
 
   auto output = OIIO::ImageOutput::create(temporary.string());
   if (!output) throw Error(path + ": no image writer for this file type (" + OIIO::geterror() + ")");
-  OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
+  OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::FLOAT);
+  if (channels == 4) spec.alpha_channel = 3;
   for (const auto& [key, value] : metadata) spec.attribute(key, value);
   const bool ok = output->open(temporary.string(), spec) &&
-                  output->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) && output->close();
+                  output->write_image(OIIO::TypeDesc::FLOAT, alpha.empty() ? image.pixels.data() : interleaved.data()) && output->close();
   if (!ok) {
     const std::string reason = output->geterror();
     std::error_code ec;

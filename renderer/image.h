@@ -9,6 +9,7 @@
 #include "renderer/math.h"
 
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,7 +48,8 @@ float srgb_to_linear(float encoded);
 
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.
+// `alpha`, if given (one value per pixel), is written as a fourth channel.
 void write_image(const std::string& path, const Image& image,
-                 const std::map<std::string, std::string>& metadata = {});
+                 const std::map<std::string, std::string>& metadata = {}, std::span<const float> alpha = {});
 
 }  // namespace glaze

@@ -30,7 +30,8 @@ Samples shade_sphere(const PolishedMaterial& material, float noise, uint64_t see
     const RGB specular = material.fresnel(mu) * office.eval(reflect(v, n));
     RGB basis;
     const RGB E = diffuse_sum(n);
-    for (int c = 0; c < 3; ++c) basis[c] = polished_diffuse_radiance(material.R0(), 1.0f, mu, E[c]);
+    const RGB L = office.eval(reflect(v, n));
+    for (int c = 0; c < 3; ++c) basis[c] = polished_diffuse_radiance(material.R0(), 1.0f, ShadingBasis<float>(mu, L[c], E[c]));
     const RGB exact = polished_radiance(material, mu, office.eval(reflect(v, n)), E);
     samples.observed.push_back(exact * (1.0f + noise * (2 * rng.next_float() - 1)));
     samples.specular.push_back(specular);

@@ -1,0 +1,258 @@
+// invert_command.cpp: `glaze invert-fit`: recovers a material from a capture set under
+// known lighting (DESIGN §5), and writes fit.json, the solver's report, re-renders of
+// every view (and of held-out views) with the recovered material, and residual images.
+//
+//   --mode material   homogeneous R0 and RGB Rd (nested: Ceres over R0, closed-form Rd)
+//   --mode texture    R0 and a diffuse texture Rd(u, v), unknown texels alpha 0
+#include "app/arguments.h"
+#include "app/commands.h"
+#include "inverse/capture_scene.h"
+#include "inverse/material_fit.h"
+#include "inverse/samples.h"
+#include "renderer/error.h"
+#include "renderer/image_error.h"
+#include "renderer/sh.h"
+#include "renderer/sh_integrator.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+namespace glaze {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+nlohmann::json rgb_json(const RGB& c) { return {c[0], c[1], c[2]}; }
+
+nlohmann::json drops_json(const DropCounts& d) {
+  return {{"grazing", d.grazing}, {"silhouette", d.silhouette}, {"non_finite", d.non_finite},
+          {"saturated", d.saturated}, {"masked", d.masked}, {"hidden", d.hidden}};
+}
+
+// The recovered diffuse texture: per texel Rd, and whether any sample constrained it.
+struct RecoveredTexture {
+  Image Rd;
+  std::vector<float> known;  // 1 known, 0 unknown (alpha)
+  double coverage = 0.0;     // fraction of texels known
+};
+
+// Texel of a sample's texture coordinate on a width x height grid (u wraps, v clamps).
+int texel_of(const Vec2& uv, int width, int height) {
+  const int i = std::clamp(int(std::floor((uv.x() - std::floor(uv.x())) * width)), 0, width - 1);
+  const int j = std::clamp(int(std::floor(uv.y() * height)), 0, height - 1);
+  return j * width + i;
+}
+
+// The paper's weighting for texture estimates: views close to the normal (mu) and a
+// large diffuse part relative to the specular one, judged at the homogeneous fit.
+std::vector<float> texture_weights(std::span<const Sample> samples, std::span<const ShadingTerms> terms, float R0,
+                                   const RGB& Rd) {
+  std::vector<float> weights(samples.size());
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const RGB total = predict(terms[k], R0, Rd), specular = predict(terms[k], R0, RGB::Zero());
+    const float diffuse = luminance(total - specular), mirror = luminance(specular);
+    weights[k] = samples[k].mu * (diffuse + mirror > 0.0f ? diffuse / (diffuse + mirror) : 0.0f);
+  }
+  return weights;
+}
+
+// Re-renders `frames` with the recovered material and writes them with residual images
+// (observed - predicted); returns per-view figures.
+nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& scene, const RayTracer& tracer,
+                        const Environment& environment, int lmax, const std::filesystem::path& out,
+                        const std::string& prefix) {
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const PinholeCamera& camera = frames[f].camera;
+    const Image observed = read_image(frames[f].file_path);
+    if (observed.width != camera.width || observed.height != camera.height)
+      throw Error(frames[f].file_path + ": the image's size differs from its camera in transforms.json");
+    // ss 1: the centre-ray model the fit used, so residuals show what the fit saw.
+    const Image predicted = render_sh(scene, tracer, environment, camera, {lmax, 1, true, 0});
+    Image residual(camera.width, camera.height);
+    for (size_t i = 0; i < residual.pixels.size(); ++i) residual.pixels[i] = observed.pixels[i] - predicted.pixels[i];
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_%03zu.exr", prefix.c_str(), f);
+    const std::string render_file = (out / ("render_" + std::string(name))).string();
+    const std::string residual_file = (out / ("residual_" + std::string(name))).string();
+    write_image(render_file, predicted, {{"glaze:integrator", "sh"}, {"glaze:lmax", std::to_string(lmax)}});
+    write_image(residual_file, residual);
+    nlohmann::json view = {{"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
+    const std::vector<uint8_t> mask = interior_mask(tracer, camera);
+    try {
+      view["relative_rmse"] = image_error(predicted, observed, mask).relative_rmse;
+    } catch (const Error&) {
+      view["relative_rmse"] = nullptr;  // the object covers no whole pixel in this view
+    }
+    views.push_back(view);
+  }
+  return views;
+}
+
+}  // namespace
+
+int command_invert_fit(const std::vector<std::string>& raw) {
+  const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
+                             "env-scale", "env-rotation", "holdout", "seed", "max-iterations", "pixel-footprint"});
+  if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
+    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture --out DIR (see `glaze help`)");
+  const std::string mode = args.text("mode", "");
+  if (mode == "lighting" || mode == "joint")
+    throw Error("--mode " + mode + " (lighting recovery) is not implemented yet; known-lighting modes: material, texture");
+  if (mode != "material" && mode != "texture") throw Error("unknown mode '" + mode + "' (known: material, texture)");
+  if (mode != "texture" && args.has("texture-res")) throw Error("--texture-res applies to --mode texture");
+  const auto start = Clock::now();
+  nlohmann::json stage_seconds;
+
+  // Inputs: the capture set, its object and its (known) lighting.
+  const CaptureSet captures = read_transforms(args.positionals()[0]);
+  std::optional<EnvironmentSpec> spec = capture_environment(captures);
+  if (args.has("env")) spec = EnvironmentSpec{args.text("env", ""), spec ? spec->options : EnvironmentOptions{}};
+  if (!spec)
+    throw Error(captures.directory + "/transforms.json names no environment: --mode " + mode +
+                " needs the lighting; give --env FILE|procedural:NAME");
+  spec->options.scale = args.real("env-scale", spec->options.scale);
+  spec->options.rotation_degrees = args.real("env-rotation", spec->options.rotation_degrees);
+  const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);
+  Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  const RayTracer tracer(scene);
+
+  SampleOptions sample_options;
+  sample_options.min_cos = args.real("min-cos", sample_options.min_cos);
+  sample_options.points = static_cast<int>(args.integer("points", 0, 0, 1 << 26));
+  sample_options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
+  auto stage = Clock::now();
+  const SampleSet samples = collect_samples(captures, tracer, scene, sample_options);
+  stage_seconds["samples"] = seconds_since(stage);
+  const DropCounts dropped = samples.total_dropped();
+  std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
+              samples.samples.size(), captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
+              dropped.saturated, dropped.masked, dropped.hidden);
+
+  // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
+  // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
+  const int lmax = static_cast<int>(args.integer("lmax", 16, 0, kShMaxLmax));
+  stage = Clock::now();
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
+  const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
+  stage_seconds["shading_terms"] = seconds_since(stage);
+
+  MaterialFitOptions fit_options;
+  fit_options.loss = RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
+  fit_options.max_iterations = static_cast<int>(args.integer("max-iterations", 100, 1, 10000));
+  stage = Clock::now();
+  MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
+  const std::filesystem::path out(args.text("out", ""));
+  std::filesystem::create_directories(out);
+  nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.text("loss", "none")},
+                           {"pixel_footprint", footprint}};
+  std::optional<RecoveredTexture> texture;
+  if (mode == "material") {
+    result["Rd"] = rgb_json(fit.Rd[0]);
+    result["Rd_unclamped"] = rgb_json(fit.Rd_unclamped[0]);
+  } else {
+    const auto [width, height] = args.resolution("texture-res", {256, 128});
+    std::vector<int> group(samples.samples.size());
+    for (size_t k = 0; k < group.size(); ++k) group[k] = texel_of(samples.samples[k].uv, width, height);
+    const std::vector<float> weights = texture_weights(samples.samples, terms, fit.R0, fit.Rd[0]);
+    result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
+    fit = fit_material(samples.samples, terms, group, width * height, weights, fit_options);
+    result["R0"] = fit.R0;
+    texture.emplace();
+    texture->Rd = Image(width, height);
+    texture->known.assign(size_t(width) * height, 0.0f);
+    size_t known = 0;
+    for (int t = 0; t < width * height; ++t) {
+      if (!(fit.constraint[t].minCoeff() > 0.0)) continue;  // no weighted sample in every channel
+      texture->Rd.set(t % width, t / width, fit.Rd[t]);
+      texture->known[t] = 1.0f;
+      ++known;
+    }
+    texture->coverage = double(known) / (width * height);
+    const std::string file = (out / "texture.exr").string();
+    write_image(file, texture->Rd, {{"glaze:R0", std::to_string(fit.R0)}}, texture->known);
+    result["texture"] = file;
+    result["texture_resolution"] = {width, height};
+    result["coverage"] = texture->coverage;
+  }
+  stage_seconds["fit"] = seconds_since(stage);
+  result["rms"] = fit.rms;
+  result["samples"] = samples.samples.size();
+  result["dropped"] = drops_json(dropped);
+  result["iterations"] = fit.iterations;
+  result["converged"] = fit.converged;
+  result["solver"] = fit.brief_report;
+  if (!captures.material.is_null()) result["reference_material"] = captures.material;
+
+  // Per-view residuals over the samples, then re-renders of the inputs and held-out views.
+  nlohmann::json per_view = nlohmann::json::array();
+  {
+    std::vector<double> squared(captures.frames.size(), 0.0), observed(captures.frames.size(), 0.0);
+    for (size_t k = 0; k < samples.samples.size(); ++k) {
+      const Sample& s = samples.samples[k];
+      const RGB& Rd = fit.Rd[texture ? texel_of(s.uv, texture->Rd.width, texture->Rd.height) : 0];
+      squared[s.frame] += (s.observed - predict(terms[k], fit.R0, Rd)).cast<double>().square().sum();
+      observed[s.frame] += s.observed.cast<double>().square().sum();
+    }
+    for (size_t f = 0; f < captures.frames.size(); ++f) {
+      const double n = 3.0 * std::max<size_t>(samples.per_frame[f], 1);
+      per_view.push_back({{"file", captures.frames[f].file_path}, {"samples", samples.per_frame[f]},
+                          {"dropped", drops_json(samples.dropped[f])}, {"rms", std::sqrt(squared[f] / n)},
+                          {"relative_rms", observed[f] > 0 ? std::sqrt(squared[f] / observed[f]) : 0.0}});
+    }
+  }
+  result["views"] = per_view;
+
+  stage = Clock::now();
+  for (SceneMaterial& m : scene.materials) {
+    m.R0 = fit.R0;
+    m.Rd = texture ? RGB::Ones() : fit.Rd[0];
+    if (texture) {
+      m.texture = 0;  // unknown texels render black: nothing is invented
+      scene.textures = {Texture{"recovered texture", texture->Rd}};
+    }
+  }
+  result["renders"] = rerender(captures.frames, scene, tracer, environment, lmax, out, "view");
+  std::filesystem::path holdout = args.has("holdout") ? std::filesystem::path(args.text("holdout", ""))
+                                                      : std::filesystem::path(captures.directory) / "holdout";
+  if (args.has("holdout") || std::filesystem::exists(holdout / "transforms.json")) {
+    const CaptureSet held_out = read_transforms(holdout.string());
+    result["holdout"] = rerender(held_out.frames, scene, tracer, environment, lmax, out, "holdout");
+  }
+  stage_seconds["renders"] = seconds_since(stage);
+  result["stage_seconds"] = stage_seconds;
+  result["seconds"] = seconds_since(start);
+
+  {
+    std::ofstream report(out / "solver.txt");
+    report << fit.full_report;
+    const std::filesystem::path target = out / "fit.json", temporary = out / ".fit.json.tmp";
+    std::ofstream file(temporary);
+    file << result.dump(2) << '\n';
+    file.close();
+    if (!file || !report) throw Error(target.string() + ": could not be written");
+    std::filesystem::rename(temporary, target);
+  }
+
+  std::printf("R0 = %.5f", fit.R0);
+  if (!texture) std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);
+  else std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height, 100 * texture->coverage);
+  std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations, fit.converged ? "converged" : "NOT converged");
+  if (!captures.material.is_null() && captures.material.contains("R0")) {
+    std::printf("true R0 = %.5f", captures.material["R0"].get<double>());
+    if (captures.material.contains("Rd") && !texture)
+      std::printf(", Rd = %.5f %.5f %.5f", captures.material["Rd"][0].get<double>(), captures.material["Rd"][1].get<double>(),
+                  captures.material["Rd"][2].get<double>());
+    std::printf("\n");
+  }
+  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  return 0;
+}
+
+}  // namespace glaze

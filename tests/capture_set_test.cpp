@@ -1,0 +1,776 @@
+// Tests of reading capture sets (DESIGN §4): round trips through write_transforms,
+// shared and per-frame intrinsics, paths resolved against the directory of
+// transforms.json, and one test per malformed input, each checking that the message
+// names the file and the key or problem at fault.
+//
+// Every capture set is written by the test into a temporary directory, with small EXR
+// images for its frames; malformed ones are a valid set with one thing broken.
+#include "renderer/camera.h"
+#include "renderer/capture_set.h"
+#include "renderer/error.h"
+#include "renderer/image.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace glaze {
+namespace {
+
+using nlohmann::json;
+using testing::TemporaryDirectory;
+
+// ---------------------------------------------------------------------------------------
+// Helpers: poses, images, a valid set to break, and checking rejections.
+// ---------------------------------------------------------------------------------------
+
+// A rigid camera-to-world pose: rotation by `degrees` about `axis`, then translation `t`.
+Eigen::Affine3f rigid(float degrees, const Vec3& axis, const Vec3& t) {
+  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+  pose.linear() = Eigen::AngleAxisf(degrees * kPi / 180.0f, axis.normalized()).toRotationMatrix();
+  pose.translation() = t;
+  return pose;
+}
+
+PinholeCamera camera(const std::string& name, int w, int h, float fl_x, float fl_y, float cx, float cy,
+                     const Eigen::Affine3f& pose) {
+  PinholeCamera c;
+  c.name = name;
+  c.width = w, c.height = h;
+  c.fl_x = fl_x, c.fl_y = fl_y, c.cx = cx, c.cy = cy;
+  c.camera_to_world = pose;
+  return c;
+}
+
+// A small image at DIR/NAME (creating folders), for a frame or mask to point at.
+void write_view(const TemporaryDirectory& dir, const std::string& name) {
+  const std::filesystem::path path = dir.path() / name;
+  std::filesystem::create_directories(path.parent_path());
+  write_image(path.string(), Image(4, 3));
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+json sphere_object() { return {{"type", "sphere"}, {"center", {0.0, 0.0, 0.0}}, {"radius", 1.0}}; }
+
+json frame_json(const std::string& file, const Eigen::Affine3f& pose) {
+  return {{"file_path", file}, {"transform_matrix", pose_to_json(pose)}};
+}
+
+// A valid set in `dir`: shared intrinsics, two 4x3 views (their images written), a sphere.
+json valid_transforms(const TemporaryDirectory& dir) {
+  write_view(dir, "view_000.exr");
+  write_view(dir, "view_001.exr");
+  return {{"w", 4},
+          {"h", 3},
+          {"fl_x", 5.0},
+          {"fl_y", 5.0},
+          {"cx", 2.0},
+          {"cy", 1.5},
+          {"frames",
+           {frame_json("view_000.exr", rigid(0, Vec3::UnitY(), Vec3(0, 0, 4))),
+            frame_json("view_001.exr", rigid(90, Vec3::UnitY(), Vec3(4, 0, 0)))}},
+          {"object", sphere_object()}};
+}
+
+// Success if `read` throws glaze::Error whose message mentions every one of `words`.
+::testing::AssertionResult fails_mentioning(const std::function<void()>& read, const std::vector<std::string>& words) {
+  try {
+    read();
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    for (const std::string& word : words)
+      if (message.find(word) == std::string::npos)
+        return ::testing::AssertionFailure() << "the message does not mention '" << word << "': " << message;
+    return ::testing::AssertionSuccess() << message;
+  } catch (const std::exception& e) {
+    return ::testing::AssertionFailure() << "threw something other than glaze::Error: " << e.what();
+  }
+  return ::testing::AssertionFailure() << "read_transforms accepted it";
+}
+
+// Writes `transforms` as DIR/transforms.json; success if reading it fails with a message
+// that names the file and every one of `words`.
+::testing::AssertionResult rejected(const TemporaryDirectory& dir, const json& transforms,
+                                    std::vector<std::string> words) {
+  write_text(dir.path() / "transforms.json", transforms.dump(2));
+  words.push_back(dir.file("transforms.json"));
+  return fails_mentioning([&] { read_transforms(dir.path().string()); }, words);
+}
+
+// The set read back from `transforms` written as DIR/transforms.json.
+CaptureSet read_back(const TemporaryDirectory& dir, const json& transforms) {
+  write_text(dir.path() / "transforms.json", transforms.dump(2));
+  return read_transforms(dir.path().string());
+}
+
+void expect_same_camera(const PinholeCamera& read, const PinholeCamera& written) {
+  EXPECT_EQ(read.name, written.name);
+  EXPECT_EQ(read.width, written.width) << written.name;
+  EXPECT_EQ(read.height, written.height) << written.name;
+  EXPECT_EQ(read.fl_x, written.fl_x) << written.name;
+  EXPECT_EQ(read.fl_y, written.fl_y) << written.name;
+  EXPECT_EQ(read.cx, written.cx) << written.name;
+  EXPECT_EQ(read.cy, written.cy) << written.name;
+  EXPECT_TRUE(read.camera_to_world.matrix().isApprox(written.camera_to_world.matrix(), 1e-6f))
+      << written.name << "\n" << read.camera_to_world.matrix() << "\nwritten\n" << written.camera_to_world.matrix();
+}
+
+// ---------------------------------------------------------------------------------------
+// 1. Round trips and what comes back.
+// ---------------------------------------------------------------------------------------
+
+// Three cameras with the same intrinsics: written once at the top, read into each frame.
+TEST(CaptureSet, RoundTripWithSharedIntrinsics) {
+  TemporaryDirectory dir;
+  CaptureSet set;
+  set.object = sphere_object();
+  set.environment = {{"procedural", "constant"}, {"scale", 2.0}, {"rotation", 30.0}};
+  set.material = {{"R0", 0.04}, {"Rd", {0.6, 0.5, 0.4}}};
+  set.saturation = 60000.0f;
+  const std::vector<Eigen::Affine3f> poses = {rigid(0, Vec3::UnitY(), Vec3(0, 0, 4)),
+                                              rigid(90, Vec3::UnitY(), Vec3(4, 0.5f, 0)),
+                                              rigid(-37, Vec3(1, 2, 3), Vec3(-1.25f, 3, 0.1f))};
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const std::string file = "view_00" + std::to_string(i) + ".exr";
+    write_view(dir, file);
+    set.frames.push_back({file, camera("cam_" + std::to_string(i), 32, 24, 30.5f, 31.25f, 16.1f, 11.9f, poses[i]), ""});
+  }
+  write_transforms(dir.path().string(), set);
+  std::ifstream stream(dir.path() / "transforms.json");
+  const json written = json::parse(stream);
+  ASSERT_TRUE(written.contains("fl_x")) << "intrinsics should be shared at the top level";
+  ASSERT_FALSE(written["frames"][0].contains("fl_x"));
+
+  const CaptureSet back = read_transforms(dir.path().string());
+  ASSERT_EQ(back.frames.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    expect_same_camera(back.frames[i].camera, set.frames[i].camera);
+    EXPECT_EQ(back.frames[i].file_path, (dir.path() / set.frames[i].file_path).string());
+    EXPECT_EQ(back.frames[i].mask_path, "");
+  }
+  EXPECT_EQ(back.directory, dir.path().string());
+  ASSERT_TRUE(back.saturation.has_value());
+  EXPECT_EQ(*back.saturation, 60000.0f);
+  EXPECT_EQ(back.object, set.object);
+  EXPECT_EQ(back.environment, set.environment);
+  EXPECT_EQ(back.material, set.material);
+}
+
+// Cameras with different intrinsics: written per frame, read back per frame; without a
+// saturation, environment or material, those come back absent.
+TEST(CaptureSet, RoundTripWithPerFrameIntrinsics) {
+  TemporaryDirectory dir;
+  CaptureSet set;
+  set.object = sphere_object();
+  write_view(dir, "a.exr");
+  write_view(dir, "b.exr");
+  set.frames.push_back({"a.exr", camera("wide", 64, 48, 20, 20, 32, 24, rigid(10, Vec3::UnitX(), Vec3(0, 1, 5))), ""});
+  set.frames.push_back({"b.exr", camera("tele", 40, 30, 80, 81, 19.5f, 15.5f, rigid(200, Vec3(0, 1, 1), Vec3(3, -2, 1))), ""});
+  write_transforms(dir.path().string(), set);
+  std::ifstream stream(dir.path() / "transforms.json");
+  const json written = json::parse(stream);
+  ASSERT_FALSE(written.contains("fl_x")) << "intrinsics differ, so they should be per frame";
+  ASSERT_TRUE(written["frames"][1].contains("fl_x"));
+
+  const CaptureSet back = read_transforms(dir.path().string());
+  ASSERT_EQ(back.frames.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) expect_same_camera(back.frames[i].camera, set.frames[i].camera);
+  EXPECT_FALSE(back.saturation.has_value());
+  EXPECT_TRUE(back.environment.is_null());
+  EXPECT_TRUE(back.material.is_null());
+}
+
+// A frame's own intrinsic overrides the top-level one; the others stay shared.
+TEST(CaptureSet, PerFrameIntrinsicOverridesTopLevel) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["fl_x"] = 7.5;
+  transforms["frames"][1]["w"] = 8;
+  const CaptureSet set = read_back(dir, transforms);
+  EXPECT_EQ(set.frames[0].camera.fl_x, 5.0f);
+  EXPECT_EQ(set.frames[0].camera.width, 4);
+  EXPECT_EQ(set.frames[1].camera.fl_x, 7.5f);
+  EXPECT_EQ(set.frames[1].camera.width, 8);
+  EXPECT_EQ(set.frames[1].camera.fl_y, 5.0f);
+  EXPECT_EQ(set.frames[1].camera.cy, 1.5f);
+}
+
+// Frames without a "camera" are named by their index; a whole-number float is a size.
+TEST(CaptureSet, FramesWithoutCameraNamesAreNumbered) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["w"] = 4.0;
+  const CaptureSet set = read_back(dir, transforms);
+  ASSERT_EQ(set.frames.size(), 2u);
+  EXPECT_EQ(set.frames[0].camera.name, "frame_000");
+  EXPECT_EQ(set.frames[1].camera.name, "frame_001");
+  EXPECT_EQ(set.frames[0].camera.width, 4);
+  // Frame 1 looks along -X: Ry(90) takes the camera's -Z to world -X.
+  const Vec3 forward = set.frames[1].camera.camera_to_world.linear() * Vec3(0, 0, -1);
+  EXPECT_NEAR(forward.x(), -1.0f, 1e-6f);
+  EXPECT_NEAR(set.frames[1].camera.position().x(), 4.0f, 1e-6f);
+}
+
+// The same set whether named by its directory or by its transforms.json.
+TEST(CaptureSet, ReadsByDirectoryOrByFile) {
+  TemporaryDirectory dir;
+  write_text(dir.path() / "transforms.json", valid_transforms(dir).dump());
+  const CaptureSet by_directory = read_transforms(dir.path().string());
+  const CaptureSet by_file = read_transforms(dir.file("transforms.json"));
+  EXPECT_EQ(by_directory.directory, dir.path().string());
+  EXPECT_EQ(by_file.directory, dir.path().string());
+  ASSERT_EQ(by_file.frames.size(), by_directory.frames.size());
+  for (size_t i = 0; i < by_file.frames.size(); ++i) {
+    EXPECT_EQ(by_file.frames[i].file_path, by_directory.frames[i].file_path);
+    expect_same_camera(by_file.frames[i].camera, by_directory.frames[i].camera);
+  }
+}
+
+// Images, masks, the object's glTF and the environment map are found relative to the
+// directory of transforms.json (not the working directory); absolute paths stay.
+TEST(CaptureSet, PathsAreResolvedAgainstTheFilesDirectory) {
+  TemporaryDirectory dir;
+  const std::filesystem::path set_dir = dir.path() / "captures";
+  write_view(dir, "captures/images/view_000.exr");
+  write_view(dir, "captures/masks/mask_000.png");
+  write_view(dir, "elsewhere/mask_001.png");
+  write_view(dir, "captures/view_001.exr");
+  write_view(dir, "env.exr");
+  write_text(dir.path() / "object.gltf", "{}");
+  const std::string absolute_mask = dir.file("elsewhere/mask_001.png");
+
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["file_path"] = "images/view_000.exr";
+  transforms["frames"][0]["mask_path"] = "masks/mask_000.png";
+  transforms["frames"][1]["mask_path"] = absolute_mask;
+  transforms["object"] = {{"gltf", "../object.gltf"}};
+  transforms["environment"] = {{"file", "../env.exr"}, {"scale", 1.0}};
+  write_text(set_dir / "transforms.json", transforms.dump());
+
+  const CaptureSet set = read_transforms((set_dir / "transforms.json").string());
+  EXPECT_EQ(set.directory, set_dir.string());
+  ASSERT_EQ(set.frames.size(), 2u);
+  EXPECT_EQ(set.frames[0].file_path, (set_dir / "images/view_000.exr").string());
+  EXPECT_EQ(set.frames[0].mask_path, (set_dir / "masks/mask_000.png").string());
+  EXPECT_EQ(set.frames[1].file_path, (set_dir / "view_001.exr").string());
+  EXPECT_EQ(set.frames[1].mask_path, absolute_mask);
+  EXPECT_TRUE(std::filesystem::equivalent(set.object["gltf"].get<std::string>(), dir.path() / "object.gltf"));
+  EXPECT_TRUE(std::filesystem::equivalent(set.environment["file"].get<std::string>(), dir.path() / "env.exr"));
+  EXPECT_EQ(set.environment["scale"], 1.0);
+  // The resolved paths open as they are.
+  EXPECT_EQ(read_image(set.frames[0].file_path).width, 4);
+}
+
+// What render --captures writes for a procedural environment: both "file" and
+// "procedural"; the file is resolved, the name kept.
+TEST(CaptureSet, ProceduralEnvironmentWithItsFile) {
+  TemporaryDirectory dir;
+  write_view(dir, "environment.exr");
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"file", "environment.exr"}, {"procedural", "office"}, {"rotation", -90.0}};
+  const CaptureSet set = read_back(dir, transforms);
+  EXPECT_EQ(set.environment["file"], dir.file("environment.exr"));
+  EXPECT_EQ(set.environment["procedural"], "office");
+  transforms["environment"] = {{"procedural", "blue-room"}};
+  EXPECT_EQ(read_back(dir, transforms).environment["procedural"], "blue-room");
+}
+
+// OPENCV and PINHOLE with zero distortion are pinholes; a pose off orthonormal by float
+// rounding is still rigid.
+TEST(CaptureSet, AcceptsUndistortedCameraModelsAndRoundedPoses) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["camera_model"] = "OPENCV";
+  for (const char* key : {"k1", "k2", "k3", "k4", "p1", "p2"}) transforms[key] = 0.0;
+  transforms["frames"][1]["camera_model"] = "PINHOLE";
+  transforms["frames"][0]["transform_matrix"] = {{1.00001, 0, 0, 0}, {0, 0.99999, 0, 0}, {0, 0, 1, 4}, {0, 0, 0, 1}};
+  EXPECT_EQ(read_back(dir, transforms).frames.size(), 2u);
+}
+
+// ---------------------------------------------------------------------------------------
+// 2. The file itself.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, MissingPathIsAnError) {
+  TemporaryDirectory dir;
+  const std::string path = dir.file("no_such_captures");
+  EXPECT_TRUE(fails_mentioning([&] { read_transforms(path); }, {path, "no such file"}));
+}
+
+TEST(CaptureSet, DirectoryWithoutTransformsIsAnError) {
+  TemporaryDirectory dir;
+  EXPECT_TRUE(fails_mentioning([&] { read_transforms(dir.path().string()); }, {dir.file("transforms.json"), "not found"}));
+}
+
+TEST(CaptureSet, UnreadableFileIsAnError) {
+  TemporaryDirectory dir;
+  write_text(dir.path() / "transforms.json", valid_transforms(dir).dump());
+  std::filesystem::permissions(dir.path() / "transforms.json", std::filesystem::perms::none);
+  if (std::ifstream(dir.path() / "transforms.json").good()) GTEST_SKIP() << "running as root: permissions do not stop reading";
+  EXPECT_TRUE(fails_mentioning([&] { read_transforms(dir.path().string()); }, {dir.file("transforms.json"), "cannot be read"}));
+}
+
+TEST(CaptureSet, MalformedJsonIsAnError) {
+  TemporaryDirectory dir;
+  write_text(dir.path() / "transforms.json", "{\"frames\": [");
+  EXPECT_TRUE(fails_mentioning([&] { read_transforms(dir.path().string()); },
+                               {dir.file("transforms.json"), "not valid JSON", "parse_error"}));
+}
+
+// A literal beyond double range is nlohmann's overflow error, reported the same way.
+TEST(CaptureSet, OverflowingNumberIsAnError) {
+  TemporaryDirectory dir;
+  std::string text = valid_transforms(dir).dump();
+  text.replace(text.find("\"fl_x\":5.0"), std::string("\"fl_x\":5.0").size(), "\"fl_x\":1e999");
+  write_text(dir.path() / "transforms.json", text);
+  EXPECT_TRUE(fails_mentioning([&] { read_transforms(dir.path().string()); },
+                               {dir.file("transforms.json"), "not valid JSON", "1e999"}));
+}
+
+TEST(CaptureSet, TopLevelNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  EXPECT_TRUE(rejected(dir, json::array({1, 2}), {"top level", "array"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 3. Frames and their files.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, MissingFramesIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms.erase("frames");
+  EXPECT_TRUE(rejected(dir, transforms, {"no \"frames\""}));
+}
+
+TEST(CaptureSet, FramesNotAnArrayIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"] = transforms["frames"][0];
+  EXPECT_TRUE(rejected(dir, transforms, {"\"frames\" must be a non-empty array"}));
+}
+
+TEST(CaptureSet, EmptyFramesIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"] = json::array();
+  EXPECT_TRUE(rejected(dir, transforms, {"\"frames\" must be a non-empty array", "[]"}));
+}
+
+TEST(CaptureSet, FrameNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1] = "view_001.exr";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "must be an object"}));
+}
+
+TEST(CaptureSet, FrameWithoutFilePathIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1].erase("file_path");
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "no \"file_path\""}));
+}
+
+TEST(CaptureSet, FilePathNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["file_path"] = 42;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"file_path\" must be a file name", "42"}));
+}
+
+TEST(CaptureSet, EmptyFilePathIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["file_path"] = "";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"file_path\" must be a file name"}));
+}
+
+TEST(CaptureSet, MissingImageIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["file_path"] = "images/gone.exr";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1 (\"images/gone.exr\")", (dir.path() / "images/gone.exr").string(),
+                                         "does not exist"}));
+}
+
+TEST(CaptureSet, ImagePathNamingADirectoryIsAnError) {
+  TemporaryDirectory dir;
+  std::filesystem::create_directories(dir.path() / "images");
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["file_path"] = "images";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "not a file"}));
+}
+
+TEST(CaptureSet, MissingMaskIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["mask_path"] = "mask_000.png";
+  EXPECT_TRUE(rejected(dir, transforms,
+                       {"frame 0 (\"view_000.exr\")", "\"mask_path\"", dir.file("mask_000.png"), "does not exist"}));
+}
+
+TEST(CaptureSet, CameraNameNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["camera"] = 3;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"camera\" must be the camera's name"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 4. Intrinsics.
+// ---------------------------------------------------------------------------------------
+
+// Neither at the top level nor in frame 1: the message names the key and the frame.
+TEST(CaptureSet, MissingIntrinsicIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms.erase("fl_x");
+  transforms["frames"][0]["fl_x"] = 5.0;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1 (\"view_001.exr\")", "no \"fl_x\"", "top level"}));
+}
+
+TEST(CaptureSet, IntrinsicNotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["cy"] = "1.5";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "\"cy\" must be a finite number", "\"1.5\""}));
+}
+
+TEST(CaptureSet, FractionalWidthIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["w"] = 4.5;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"w\" must be a whole number of pixels", "4.5"}));
+}
+
+TEST(CaptureSet, ZeroHeightIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["h"] = 0;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"h\" must be a whole number of pixels from 1"}));
+}
+
+TEST(CaptureSet, AbsurdWidthIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["w"] = 100000;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"w\"", "to 65536", "100000"}));
+}
+
+TEST(CaptureSet, ZeroFocalLengthIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["fl_x"] = 0;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"fl_x\" must be a finite number > 0"}));
+}
+
+TEST(CaptureSet, NegativeFocalLengthIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["fl_y"] = -5.0;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "\"fl_y\" must be a finite number > 0", "-5.0"}));
+}
+
+// 1e300 is a double but no float: the camera would hold infinity.
+TEST(CaptureSet, FocalLengthBeyondFloatIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["fl_x"] = 1e300;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"fl_x\" must be a finite number", "1e+300"}));
+}
+
+TEST(CaptureSet, PrincipalPointBeyondFloatIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["cx"] = -1e300;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"cx\" must be a finite number", "-1e+300"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 5. Lens distortion and camera models.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, TopLevelDistortionIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["camera_model"] = "OPENCV";
+  transforms["k1"] = -0.12;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"k1\"", "distortion", "not supported", "undistort"}));
+}
+
+TEST(CaptureSet, PerFrameDistortionIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["p2"] = 0.001;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "\"p2\"", "distortion", "undistort"}));
+}
+
+// A zero at the top level does not excuse a non-zero k4 in a frame.
+TEST(CaptureSet, FrameDistortionOverridesZeroAtTopIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["k4"] = 0.0;
+  transforms["frames"][0]["k4"] = 0.3;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"k4\"", "distortion"}));
+}
+
+TEST(CaptureSet, DistortionNotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["k2"] = "none";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"k2\" must be a finite number"}));
+}
+
+TEST(CaptureSet, FisheyeCameraModelIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["camera_model"] = "OPENCV_FISHEYE";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"camera_model\"", "OPENCV_FISHEYE", "not supported", "PINHOLE"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 6. Poses.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, MissingTransformMatrixIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1].erase("transform_matrix");
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1 (\"view_001.exr\")", "no \"transform_matrix\""}));
+}
+
+TEST(CaptureSet, ThreeRowTransformMatrixIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"].erase(3);
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"transform_matrix\" must be 4 rows of 4 numbers"}));
+}
+
+TEST(CaptureSet, ShortTransformMatrixRowIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"][2] = {0, 0, 1};
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"transform_matrix[2]\" must be an array of 4 numbers"}));
+}
+
+TEST(CaptureSet, TransformMatrixEntryNotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"][1][3] = "up";
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"transform_matrix[1][3]\" must be a finite number"}));
+}
+
+TEST(CaptureSet, TransformMatrixEntryBeyondFloatIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["transform_matrix"][0][3] = 1e300;
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "\"transform_matrix[0][3]\" must be a finite number"}));
+}
+
+TEST(CaptureSet, ProjectiveLastRowIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"][3] = {0, 0, 0.1, 1};
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "last row of \"transform_matrix\"", "rigid camera-to-world"}));
+}
+
+TEST(CaptureSet, ScaledPoseIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"] = {{2, 0, 0, 0}, {0, 2, 0, 0}, {0, 0, 2, 4}, {0, 0, 0, 1}};
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"transform_matrix\" is not a rotation", "rigid camera-to-world"}));
+}
+
+TEST(CaptureSet, SingularPoseIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][1]["transform_matrix"] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 0, 4}, {0, 0, 0, 1}};
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "not a rotation", "det R = 0", "rigid camera-to-world"}));
+}
+
+// Orthonormal but a mirror image (determinant -1).
+TEST(CaptureSet, MirroredPoseIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["transform_matrix"] = {{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 4}, {0, 0, 0, 1}};
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "not a rotation", "det R = -1", "rigid camera-to-world"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 7. The object.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, MissingObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms.erase("object");
+  EXPECT_TRUE(rejected(dir, transforms, {"no \"object\"", "sphere", "gltf"}));
+}
+
+TEST(CaptureSet, UnknownObjectTypeIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"]["type"] = "cube";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "cube", "\"type\": \"sphere\""}));
+}
+
+TEST(CaptureSet, ObjectNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"] = "sphere";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "must be"}));
+}
+
+TEST(CaptureSet, SphereAndGltfTogetherIsAnError) {
+  TemporaryDirectory dir;
+  write_text(dir.path() / "object.gltf", "{}");
+  json transforms = valid_transforms(dir);
+  transforms["object"]["gltf"] = "object.gltf";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "must be"}));
+}
+
+TEST(CaptureSet, SphereWithoutRadiusIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"].erase("radius");
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "no \"radius\""}));
+}
+
+TEST(CaptureSet, NegativeSphereRadiusIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"]["radius"] = -1.0;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"radius\" must be a finite number > 0"}));
+}
+
+TEST(CaptureSet, SphereCenterOfTwoNumbersIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"]["center"] = {0.0, 1.0};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"center\" must be an array of 3 numbers"}));
+}
+
+TEST(CaptureSet, SphereCenterBeyondFloatIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"]["center"][1] = 1e300;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"center[1]\" must be a finite number"}));
+}
+
+TEST(CaptureSet, MissingGltfFileIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"] = {{"gltf", "object.glb"}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"gltf\"", dir.file("object.glb"), "does not exist"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 8. The known material.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, MaterialNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = 0.04;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "must be {\"R0\""}));
+}
+
+TEST(CaptureSet, MaterialWithoutR0IsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"Rd", {0.5, 0.5, 0.5}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "no \"R0\""}));
+}
+
+TEST(CaptureSet, R0AboveOneIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"R0", 1.5}, {"Rd", {0.5, 0.5, 0.5}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"R0\" must be a number in [0, 1]", "1.5"}));
+}
+
+TEST(CaptureSet, RdOfTwoNumbersIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"R0", 0.04}, {"Rd", {0.5, 0.5}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"Rd\" must be an array of 3 numbers"}));
+}
+
+TEST(CaptureSet, NegativeRdIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"R0", 0.04}, {"Rd", {0.5, -0.1, 0.5}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"Rd[1]\" must be a number in [0, 1]"}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 9. The environment and the saturation level.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, EnvironmentNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = "env.exr";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "must be {\"file\""}));
+}
+
+TEST(CaptureSet, EnvironmentWithoutFileOrProceduralIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"scale", 1.0}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"procedural\""}));
+}
+
+TEST(CaptureSet, MissingEnvironmentFileIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"file", "env.exr"}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"file\"", dir.file("env.exr"), "does not exist"}));
+}
+
+TEST(CaptureSet, ProceduralNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"procedural", 1}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"procedural\" must be the name"}));
+}
+
+TEST(CaptureSet, NegativeEnvironmentScaleIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"procedural", "office"}, {"scale", -2.0}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"scale\" must be a finite number >= 0"}));
+}
+
+TEST(CaptureSet, EnvironmentRotationBeyondFloatIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"procedural", "office"}, {"rotation", 1e300}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"rotation\" must be a finite number"}));
+}
+
+TEST(CaptureSet, ZeroSaturationIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["saturation"] = 0;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"saturation\" must be a finite number > 0"}));
+}
+
+TEST(CaptureSet, SaturationNotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["saturation"] = "high";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"saturation\" must be a finite number", "\"high\""}));
+}
+
+}  // namespace
+}  // namespace glaze
