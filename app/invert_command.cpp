@@ -9,6 +9,7 @@
 #include "inverse/capture_scene.h"
 #include "inverse/material_fit.h"
 #include "inverse/samples.h"
+#include "inverse/texture_fit.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
 #include "renderer/sh.h"
@@ -35,37 +36,10 @@ nlohmann::json drops_json(const DropCounts& d) {
           {"saturated", d.saturated}, {"masked", d.masked}, {"hidden", d.hidden}};
 }
 
-// The recovered diffuse texture: per texel Rd, and whether any sample constrained it.
-struct RecoveredTexture {
-  Image Rd;
-  std::vector<float> known;  // 1 known, 0 unknown (alpha)
-  double coverage = 0.0;     // fraction of texels known
-};
-
-// Texel of a sample's texture coordinate on a width x height grid (u wraps, v clamps).
-int texel_of(const Vec2& uv, int width, int height) {
-  const int i = std::clamp(int(std::floor((uv.x() - std::floor(uv.x())) * width)), 0, width - 1);
-  const int j = std::clamp(int(std::floor(uv.y() * height)), 0, height - 1);
-  return j * width + i;
-}
-
-// The paper's weighting for texture estimates: views close to the normal (mu) and a
-// large diffuse part relative to the specular one, judged at the homogeneous fit.
-std::vector<float> texture_weights(std::span<const Sample> samples, std::span<const ShadingTerms> terms, float R0,
-                                   const RGB& Rd) {
-  std::vector<float> weights(samples.size());
-  for (size_t k = 0; k < samples.size(); ++k) {
-    const RGB total = predict(terms[k], R0, Rd), specular = predict(terms[k], R0, RGB::Zero());
-    const float diffuse = luminance(total - specular), mirror = luminance(specular);
-    weights[k] = samples[k].mu * (diffuse + mirror > 0.0f ? diffuse / (diffuse + mirror) : 0.0f);
-  }
-  return weights;
-}
-
 // Re-renders `frames` with the recovered material and writes them with residual images
 // (observed - predicted); returns per-view figures.
 nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& scene, const RayTracer& tracer,
-                        const Environment& environment, int lmax, const std::filesystem::path& out,
+                        const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
                         const std::string& prefix) {
   nlohmann::json views = nlohmann::json::array();
   for (size_t f = 0; f < frames.size(); ++f) {
@@ -73,8 +47,8 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
     const Image observed = read_image(frames[f].file_path);
     if (observed.width != camera.width || observed.height != camera.height)
       throw Error(frames[f].file_path + ": the image's size differs from its camera in transforms.json");
-    // ss 1: the centre-ray model the fit used, so residuals show what the fit saw.
-    const Image predicted = render_sh(scene, tracer, environment, camera, {lmax, 1, true, 0});
+    // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
+    const Image predicted = render_sh(scene, tracer, environment, camera, {lmax, footprint, true, 0});
     Image residual(camera.width, camera.height);
     for (size_t i = 0; i < residual.pixels.size(); ++i) residual.pixels[i] = observed.pixels[i] - predicted.pixels[i];
     char name[64];
@@ -158,28 +132,21 @@ int command_invert_fit(const std::vector<std::string>& raw) {
     result["Rd_unclamped"] = rgb_json(fit.Rd_unclamped[0]);
   } else {
     const auto [width, height] = args.resolution("texture-res", {256, 128});
-    std::vector<int> group(samples.samples.size());
-    for (size_t k = 0; k < group.size(); ++k) group[k] = texel_of(samples.samples[k].uv, width, height);
-    const std::vector<float> weights = texture_weights(samples.samples, terms, fit.R0, fit.Rd[0]);
     result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
-    fit = fit_material(samples.samples, terms, group, width * height, weights, fit_options);
+    texture = fit_texture(samples.samples, terms, width, height, fit, fit_options);
+    fit = texture->fit;
     result["R0"] = fit.R0;
-    texture.emplace();
-    texture->Rd = Image(width, height);
-    texture->known.assign(size_t(width) * height, 0.0f);
-    size_t known = 0;
-    for (int t = 0; t < width * height; ++t) {
-      if (!(fit.constraint[t].minCoeff() > 0.0)) continue;  // no weighted sample in every channel
-      texture->Rd.set(t % width, t / width, fit.Rd[t]);
-      texture->known[t] = 1.0f;
-      ++known;
-    }
-    texture->coverage = double(known) / (width * height);
     const std::string file = (out / "texture.exr").string();
     write_image(file, texture->Rd, {{"glaze:R0", std::to_string(fit.R0)}}, texture->known);
     result["texture"] = file;
     result["texture_resolution"] = {width, height};
     result["coverage"] = texture->coverage;
+    if (captures.material.contains("texture")) {
+      RGB factor = RGB::Ones();
+      if (captures.material.contains("Rd"))
+        for (int c = 0; c < 3; ++c) factor[c] = captures.material["Rd"][c].get<float>();
+      result["texture_rmse"] = texture_rmse(*texture, read_image(captures.material["texture"].get<std::string>()), factor);
+    }
   }
   stage_seconds["fit"] = seconds_since(stage);
   result["rms"] = fit.rms;
@@ -218,12 +185,12 @@ int command_invert_fit(const std::vector<std::string>& raw) {
       scene.textures = {Texture{"recovered texture", texture->Rd}};
     }
   }
-  result["renders"] = rerender(captures.frames, scene, tracer, environment, lmax, out, "view");
+  result["renders"] = rerender(captures.frames, scene, tracer, environment, lmax, footprint, out, "view");
   std::filesystem::path holdout = args.has("holdout") ? std::filesystem::path(args.text("holdout", ""))
                                                       : std::filesystem::path(captures.directory) / "holdout";
   if (args.has("holdout") || std::filesystem::exists(holdout / "transforms.json")) {
     const CaptureSet held_out = read_transforms(holdout.string());
-    result["holdout"] = rerender(held_out.frames, scene, tracer, environment, lmax, out, "holdout");
+    result["holdout"] = rerender(held_out.frames, scene, tracer, environment, lmax, footprint, out, "holdout");
   }
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
@@ -243,6 +210,7 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   std::printf("R0 = %.5f", fit.R0);
   if (!texture) std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);
   else std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height, 100 * texture->coverage);
+  if (result.contains("texture_rmse")) std::printf(", texel RMSE against the reference %.4f", result["texture_rmse"].get<double>());
   std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations, fit.converged ? "converged" : "NOT converged");
   if (!captures.material.is_null() && captures.material.contains("R0")) {
     std::printf("true R0 = %.5f", captures.material["R0"].get<double>());

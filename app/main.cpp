@@ -5,15 +5,11 @@
 #include "app/commands.h"
 #include "renderer/environment.h"
 #include "renderer/error.h"
-#include "renderer/material.h"
 #include "renderer/procedural_environment.h"
-#include "renderer/quadrature.h"
-#include "renderer/shading.h"
 #include "renderer/sh.h"
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -25,7 +21,9 @@ namespace {
 constexpr const char* kUsage = R"(glaze: render polished materials under environment lighting, and invert.
 
 usage:
-  glaze demo                     the default scene: SH lighting and furnace check
+  glaze demo [--out DIR]         the embedded default, end to end: captures of the red
+                                 sphere in the procedural office, fitted, recovered
+                                 against true material (writes DIR, default glaze-demo)
   glaze sh ENV [options]         print the SH coefficients of ENV as JSON
   glaze env procedural NAME --out FILE.exr [--res WxH]
                                  write a procedural environment map
@@ -34,6 +32,9 @@ usage:
                                  path-trace a glTF scene's cameras / a capture set
   glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR
                                  error against run time: path tracer and sh integrator
+  glaze invert-fit CAPTURES/transforms.json --mode material|texture --out DIR [options]
+                                 recover the material (or R0 and a diffuse texture)
+                                 from a capture set under its known lighting
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -61,6 +62,20 @@ options of `render`:
   --integrator sh     the analytic SH shading model (DESIGN section 2), no noise:
     --lmax N          SH band limit of the diffuse term (default 4)
     --ss K            K x K sub-pixel samples (default 2)
+
+options of `invert-fit`:
+  --env ENV, --env-scale S, --env-rotation DEG   the lighting (default: the set's)
+  --lmax N            SH band limit of the diffuse term (default 16: exact to <0.1%)
+  --pixel-footprint K model each pixel as the mean of K x K rays over it (default 4,
+                      as a camera records it; 1 for point-sampled captures)
+  --points N          N points spread over the object instead of every pixel
+  --min-cos X         drop samples seen at n.v < X (default 0.2)
+  --loss L            none (default), huber or cauchy, with --loss-scale S
+                      (radiance; default 0.05)
+  --texture-res WxH   texels of --mode texture (default 256x128)
+  --holdout DIR       held-out captures to re-render (default: CAPTURES/holdout)
+  Writes DIR/fit.json, solver.txt, render_view_NNN.exr and residual_view_NNN.exr
+  (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture.
 
 options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
   --ref-spp N         path-trace the reference at N spp, in two halves whose
@@ -117,52 +132,6 @@ int command_env(const std::vector<std::string>& raw) {
   return 0;
 }
 
-// The embedded default scene: the paper's red sphere in the procedural office.
-int command_demo() {
-  const PolishedMaterial red(0.0452f, RGB(0.9765f, 0.0186f, 0.0f));
-  std::printf("glaze demo: red sphere (R0 = %.4f, Rd = %.4f %.4f %.4f) in procedural:office\n\n", red.R0(),
-              red.Rd()[0], red.Rd()[1], red.Rd()[2]);
-
-  const auto start = std::chrono::steady_clock::now();
-  const Environment office = make_environment("procedural:office");
-  const auto generated = std::chrono::steady_clock::now();
-  const ShCoefficients& lighting = office.sh(4);
-  const auto projected = std::chrono::steady_clock::now();
-  auto milliseconds = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
-  std::printf("office environment 1024x512 generated in %.0f ms; SH projection (lmax 4) in %.1f ms\n",
-              milliseconds(start, generated), milliseconds(generated, projected));
-  std::printf("  l  m        L_lm (R, G, B)\n");
-  for (int l = 0; l <= 4; ++l)
-    for (int m = -l; m <= l; ++m)
-      std::printf("  %d %2d  %9.4f %9.4f %9.4f\n", l, m, lighting(l, m)[0], lighting(l, m)[1], lighting(l, m)[2]);
-
-  // White furnace: under a constant environment of radiance 1 a material with Rd = 1
-  // reflects exactly 1 in every direction. Checked two independent ways: a quadrature
-  // of the BRDF over the hemisphere, and the SH shading model.
-  const PolishedMaterial white(red.R0(), RGB::Ones());
-  const Environment constant = make_environment("procedural:constant", {}, 64, 32);
-  const ShDiffuseSum diffuse_sum(constant.sh(4));
-  const QuadratureRule mu_rule = gauss_legendre(16, 0.0, 1.0);
-  std::printf("\nwhite furnace (Rd = 1, R0 = %.4f, constant environment of radiance 1):\n", white.R0());
-  std::printf("  mu_o     quadrature   SH model     expected\n");
-  for (float mu_o : {1.0f, 0.7f, 0.3f, 0.05f}) {
-    const Vec3 wo(std::sqrt(1.0f - mu_o * mu_o), 0.0f, mu_o);
-    double integral = 0.0;  // f_d is independent of phi_i: integrate mu_i, times 2 pi
-    for (size_t k = 0; k < mu_rule.nodes.size(); ++k) {
-      const float mu_i = static_cast<float>(mu_rule.nodes[k]);
-      const Vec3 wi(std::sqrt(1.0f - mu_i * mu_i), 0.0f, mu_i);
-      integral += mu_rule.weights[k] * white.eval_diffuse(wo, wi)[0] * mu_i * 2.0 * kPiD;
-    }
-    const double quadrature = white.fresnel(mu_o) + integral;
-    const Vec3 n = Vec3::UnitZ();
-    const RGB sh_model = polished_radiance(white, mu_o, constant.eval(reflect(wo, n)), diffuse_sum(n));
-    std::printf("  %.2f     %.6f     %.6f     1\n", mu_o, quadrature, sh_model[0]);
-  }
-  std::printf("\nred sphere directional albedo at mu_o = 1: %.4f %.4f %.4f\n", red.albedo(1.0f)[0],
-              red.albedo(1.0f)[1], red.albedo(1.0f)[2]);
-  return 0;
-}
-
 int run(const std::vector<std::string>& args) {
   if (args.empty() || args[0] == "help" || args[0] == "--help" || args[0] == "-h") {
     std::cout << kUsage;
@@ -170,7 +139,7 @@ int run(const std::vector<std::string>& args) {
   }
   const std::string command = args[0];
   const std::vector<std::string> rest(args.begin() + 1, args.end());
-  if (command == "demo") return command_demo();
+  if (command == "demo") return command_demo(rest);
   if (command == "sh") return command_sh(rest);
   if (command == "env") return command_env(rest);
   if (command == "render") return command_render(rest);

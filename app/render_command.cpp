@@ -123,7 +123,12 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   if (used.size() == 1) {
     const SceneMaterial& m = scene.materials[*used.begin()];
     material = {{"R0", m.R0}, {"Rd", {m.Rd[0], m.Rd[1], m.Rd[2]}}};
-    if (m.texture >= 0) material["texture"] = scene.textures[m.texture].source;
+    if (m.texture >= 0) {
+      // As an absolute path when it is a file beside the scene (not embedded data), so
+      // that the fit can compare its recovered texture against it.
+      const std::filesystem::path file = std::filesystem::absolute(std::filesystem::path(scene.path).parent_path() / scene.textures[m.texture].source);
+      material["texture"] = std::filesystem::exists(file) ? file.string() : scene.textures[m.texture].source;
+    }
   }
 
   for (bool held_out : {false, true}) {

@@ -94,8 +94,9 @@ double loss_weight(const RobustLoss& loss, double s) {
   return 1.0;
 }
 
-// The nested model's residuals for a given R0: all samples x 3 channels, each
-// sqrt(weight) (o - s - Rd b) robustified, with Rd the inner solve of its group.
+// The nested model's residuals for a given R0 with a robust loss: all samples x 3
+// channels, each sqrt(weight) (o - s - Rd b) robustified, with Rd the inner solve of its
+// group (IRLS). Without a robust loss MomentResidual computes the same objective faster.
 class NestedResidual {
  public:
   NestedResidual(std::span<const Sample> samples, std::span<const ShadingTerms> terms, std::span<const int> group,
@@ -121,15 +122,6 @@ class NestedResidual {
 
   // The inner solve at R0, with the robust weights of its converged IRLS.
   std::vector<DiffuseNormalEquations<double>> inner_solve(double R0) const { return solve(R0, robust_weights(R0)); }
-
-  // Sum of squared residuals (robustified), for the starting-point search.
-  double cost(double R0) const {
-    std::vector<double> residuals(residual_count());
-    (*this)(&R0, residuals.data());
-    double sum = 0.0;
-    for (double r : residuals) sum += r * r;
-    return sum;
-  }
 
  private:
   static double scalar(double x) { return x; }
@@ -183,35 +175,96 @@ class NestedResidual {
   RobustLoss loss_;
 };
 
-}  // namespace
+// Least squares without a robust loss, in closed form. Per group and channel, sample k's
+// residual is linear in z = (1, q, q Rd) with q = 1 - R0 (shading.h's affine form):
+//   r_k = (o - L) + q gL - q Rd K gE = v_k . z,   v_k = (o - L, gL, -K gE),
+// so sum_k w_k r_k^2 = z^T M z with M = sum_k w_k v_k v_k^T. Factoring M = U^T U turns that
+// sum into the three residuals U z: exactly the per-sample objective and its Jacobian,
+// at a cost per evaluation independent of the number of samples.
+class MomentResidual {
+ public:
+  MomentResidual(std::span<const Sample> samples, std::span<const ShadingTerms> terms, std::span<const int> group,
+                 int groups, std::span<const float> weights)
+      : moments_(size_t(groups) * 3, Eigen::Matrix3d::Zero()) {
+    for (size_t k = 0; k < samples.size(); ++k) {
+      const double w = weights.empty() ? 1.0 : weights[k];
+      for (int c = 0; c < 3; ++c) {
+        const ShadingBasis<float>& b = terms[k][c];
+        const Eigen::Vector3d v(double(samples[k].observed[c]) - b.L, b.gL, -kDiffuseNormalisation * b.gE);
+        moments_[size_t(group.empty() ? 0 : group[k]) * 3 + c] += w * v * v.transpose();
+      }
+    }
+    for (const Eigen::Matrix3d& m : moments_) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(m);
+      factors_.push_back(eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * eigen.eigenvectors().transpose());
+    }
+  }
 
-MaterialFit fit_material(std::span<const Sample> samples, std::span<const ShadingTerms> terms,
-                         std::span<const int> group, int groups, std::span<const float> weights,
-                         const MaterialFitOptions& options) {
-  if (samples.empty()) throw Error("no samples to fit");
-  if (terms.size() != samples.size() || (!group.empty() && group.size() != samples.size()) ||
-      (!weights.empty() && weights.size() != samples.size()))
-    throw Error("fit_material: per-sample arrays differ in length");
-  double light = 0.0;
-  for (const Sample& s : samples) light += s.observed.abs().sum();
-  if (!(light > 1e-12 * samples.size()))
-    throw Error("the images are black wherever the object is seen: there is no light to fit a material to "
-                "(check the exposure and that the object is lit)");
+  int residual_count() const { return int(moments_.size()) * 3; }
 
-  const NestedResidual residual(samples, terms, group, group.empty() ? 1 : groups, weights, options.loss);
-  // The objective over R0 need not be convex: start Ceres from the best of a coarse grid.
+  template <typename T>
+  bool operator()(const T* const R0, T* residuals) const {
+    const T q = T(1) - R0[0];
+    for (size_t group = 0; group < moments_.size() / 3; ++group) {
+      const DiffuseNormalEquations<T> equations = equations_of(group, q);
+      for (int c = 0; c < 3; ++c) {
+        const T z[3] = {T(1), q, q * equations.solve(c)};
+        const Eigen::Matrix3d& U = factors_[group * 3 + c];
+        for (int i = 0; i < 3; ++i) residuals[(group * 3 + c) * 3 + i] = T(U(i, 0)) * z[0] + T(U(i, 1)) * z[1] + T(U(i, 2)) * z[2];
+      }
+    }
+    return true;
+  }
+
+  std::vector<DiffuseNormalEquations<double>> inner_solve(double R0) const {
+    std::vector<DiffuseNormalEquations<double>> all;
+    for (size_t group = 0; group < moments_.size() / 3; ++group) all.push_back(equations_of(group, 1.0 - R0));
+    return all;
+  }
+
+ private:
+  // The inner solve's normal equations from the moments: with b = q K gE = -q v_3 and
+  // o - s = v_1 + q v_2, sum w b (o - s) = -q (M_31 + q M_32) and sum w b^2 = q^2 M_33.
+  template <typename T>
+  DiffuseNormalEquations<T> equations_of(size_t group, const T& q) const {
+    DiffuseNormalEquations<T> equations;
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Matrix3d& m = moments_[group * 3 + c];
+      equations.numerator[c] = -q * (T(m(2, 0)) + q * T(m(2, 1)));
+      equations.denominator[c] = q * q * T(m(2, 2));
+    }
+    return equations;
+  }
+
+  std::vector<Eigen::Matrix3d> moments_;  // per group and channel
+  std::vector<Eigen::Matrix3d> factors_;  // U with U^T U = M
+};
+
+// Sum of squared residuals at R0, for the starting-point search.
+template <typename Residual>
+double sum_of_squares(const Residual& residual, double R0) {
+  std::vector<double> residuals(residual.residual_count());
+  residual(&R0, residuals.data());
+  double sum = 0.0;
+  for (double r : residuals) sum += r * r;
+  return sum;
+}
+
+// The outer search over R0 for either residual: the best of a coarse grid (the objective
+// need not be convex), then Ceres from there.
+template <typename Residual>
+MaterialFit solve_outer(const Residual& residual, const MaterialFitOptions& options) {
   const ParameterSpec& bounds = parameter_spec(MaterialParameter::R0);
   double R0 = bounds.lower, best = INFINITY;
   for (int i = 0; i <= 40; ++i) {
     const double candidate = bounds.lower + (bounds.upper - bounds.lower) * i / 40.0;
-    const double cost = residual.cost(candidate);
+    const double cost = sum_of_squares(residual, candidate);
     if (cost < best) best = cost, R0 = candidate;
   }
-
   ceres::Problem problem;
-  auto* cost = new ceres::AutoDiffCostFunction<NestedResidual, ceres::DYNAMIC, 1>(
-      new NestedResidual(residual), residual.residual_count());
-  problem.AddResidualBlock(cost, nullptr, &R0);
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<Residual, ceres::DYNAMIC, 1>(new Residual(residual), residual.residual_count()),
+      nullptr, &R0);
   problem.SetParameterLowerBound(&R0, 0, bounds.lower);
   problem.SetParameterUpperBound(&R0, 0, bounds.upper);
   ceres::Solver::Options solver;
@@ -233,8 +286,7 @@ MaterialFit fit_material(std::span<const Sample> samples, std::span<const Shadin
   fit.converged = summary.termination_type == ceres::CONVERGENCE;
   fit.brief_report = summary.BriefReport();
   fit.full_report = summary.FullReport();
-  const std::vector<DiffuseNormalEquations<double>> inner = residual.inner_solve(R0);
-  for (const auto& equations : inner) {
+  for (const auto& equations : residual.inner_solve(R0)) {
     RGB Rd, unclamped;
     RGBd constraint;
     for (int c = 0; c < 3; ++c) {
@@ -246,6 +298,28 @@ MaterialFit fit_material(std::span<const Sample> samples, std::span<const Shadin
     fit.Rd_unclamped.push_back(unclamped);
     fit.constraint.push_back(constraint);
   }
+  return fit;
+}
+
+}  // namespace
+
+MaterialFit fit_material(std::span<const Sample> samples, std::span<const ShadingTerms> terms,
+                         std::span<const int> group, int groups, std::span<const float> weights,
+                         const MaterialFitOptions& options) {
+  if (samples.empty()) throw Error("no samples to fit");
+  if (terms.size() != samples.size() || (!group.empty() && group.size() != samples.size()) ||
+      (!weights.empty() && weights.size() != samples.size()))
+    throw Error("fit_material: per-sample arrays differ in length");
+  double light = 0.0;
+  for (const Sample& s : samples) light += s.observed.abs().sum();
+  if (!(light > 1e-12 * samples.size()))
+    throw Error("the images are black wherever the object is seen: there is no light to fit a material to "
+                "(check the exposure and that the object is lit)");
+
+  const int group_count = group.empty() ? 1 : groups;
+  MaterialFit fit = options.loss.kind == RobustLoss::Kind::none
+                        ? solve_outer(MomentResidual(samples, terms, group, group_count, weights), options)
+                        : solve_outer(NestedResidual(samples, terms, group, group_count, weights, options.loss), options);
   double squared = 0.0;
   for (size_t k = 0; k < samples.size(); ++k) {
     const RGB r = samples[k].observed - predict(terms[k], fit.R0, fit.Rd[group.empty() ? 0 : group[k]]);

@@ -247,7 +247,7 @@ template <typename Lmax>
 RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
   // The basis values first, then three independent dot products: one running sum per
   // channel would chain every multiply-add on the previous one.
-  constexpr int kStack = sh_count(8);
+  constexpr int kStack = sh_count(16);
   const int count = sh_count(lmax);
   float stack[kStack];
   std::vector<float> heap(count > kStack ? count : 0);
@@ -260,12 +260,14 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
 }
 
 RGB ShDiffuseSum::operator()(const Vec3& n) const {
-  // The band limits people use, unrolled at compile time (about 4x faster than the loop).
+  // The band limits people use, unrolled at compile time (1.3x to 2x faster than the loop).
   switch (lmax_) {
     case 2: return sum(std::integral_constant<int, 2>(), n);
     case 4: return sum(std::integral_constant<int, 4>(), n);
     case 6: return sum(std::integral_constant<int, 6>(), n);
     case 8: return sum(std::integral_constant<int, 8>(), n);
+    case 12: return sum(std::integral_constant<int, 12>(), n);
+    case 16: return sum(std::integral_constant<int, 16>(), n);
     default: return sum(lmax_, n);
   }
 }

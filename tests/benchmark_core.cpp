@@ -1,6 +1,10 @@
 // Benchmarks of the shared core (Google Benchmark). Run: build/tests/glaze_bench
 // Reported in issue notes: SH projection of a 1024x512 map at lmax 4, 10M environment
-// samples on all cores, a 512x512 frame of the sh integrator.
+// samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline.
+#include "inverse/capture_scene.h"
+#include "inverse/material_fit.h"
+#include "inverse/samples.h"
+#include "inverse/texture_fit.h"
 #include "renderer/environment.h"
 #include "renderer/material.h"
 #include "renderer/procedural_environment.h"
@@ -12,6 +16,9 @@
 
 #include <benchmark/benchmark.h>
 #include <array>
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
 #include <tbb/parallel_for.h>
 
 namespace glaze {
@@ -90,7 +97,7 @@ void BM_ShDiffuseSum(benchmark::State& state) {
     benchmark::DoNotOptimize(sum(n));
   }
 }
-BENCHMARK(BM_ShDiffuseSum)->Arg(4)->Arg(8);
+BENCHMARK(BM_ShDiffuseSum)->Arg(4)->Arg(8)->Arg(16);
 
 void BM_MaterialSample(benchmark::State& state) {
   const PolishedMaterial material(0.0452f, RGB(0.9765f, 0.0186f, 0.0f));
@@ -115,6 +122,47 @@ void BM_ShIntegratorFrame512(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * 512 * 512 * 4);
 }
 BENCHMARK(BM_ShIntegratorFrame512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The issue-5 figures: the fit pipeline of `invert-fit` (samples, shading terms, the
+// nested fit; not the re-renders) on sh-rendered 512x512 captures made once by the glaze
+// command: three views of the red sphere (homogeneous), four of the textured sphere at
+// 256x128 texels (texture). The per-stage times are in fit.json's stage_seconds.
+std::string benchmark_captures(const std::string& scene, const std::string& holdout) {
+  const std::string folder = (std::filesystem::temp_directory_path() / ("glaze_bench_" + scene)).string();
+  if (!std::filesystem::exists(folder + "/transforms.json")) {
+    const std::string command = std::string(GLAZE_EXECUTABLE) + " render " + GLAZE_SOURCE_DIR + "/scenes/" + scene +
+                                ".gltf --integrator sh --res 512x512 --holdout " + holdout + " --captures " + folder + " 2>/dev/null";
+    if (std::system(command.c_str()) != 0) throw std::runtime_error("could not render the benchmark captures");
+  }
+  return folder;
+}
+
+void fit_benchmark(benchmark::State& state, const std::string& folder, int texels_wide) {
+  const CaptureSet captures = read_transforms(folder);
+  const Environment environment = make_environment(capture_environment(captures)->source);
+  environment.sh(16);  // the projection is a per-environment cost, measured on its own above
+  const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  const RayTracer tracer(scene);
+  size_t samples = 0;
+  for (auto _ : state) {
+    const SampleSet set = collect_samples(captures, tracer, scene, {});
+    const std::vector<ShadingTerms> terms = shading_terms(set, captures, tracer, environment, 16, 4);
+    const MaterialFit homogeneous = fit_material(set.samples, terms, {}, 1, {}, {});
+    if (texels_wide > 0) benchmark::DoNotOptimize(fit_texture(set.samples, terms, texels_wide, texels_wide / 2, homogeneous, {}));
+    samples = set.samples.size();
+  }
+  state.counters["samples"] = double(samples);
+}
+
+void BM_HomogeneousFit3x512(benchmark::State& state) {
+  fit_benchmark(state, benchmark_captures("red_sphere_office", "novel_0,novel_1"), 0);
+}
+BENCHMARK(BM_HomogeneousFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_TextureFit4x512(benchmark::State& state) {
+  fit_benchmark(state, benchmark_captures("textured_sphere_office", "novel_0,novel_1"), 256);
+}
+BENCHMARK(BM_TextureFit4x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace glaze

@@ -147,9 +147,13 @@ TEST(Cli, ConvergenceWritesTheStudy) {
 
 TEST(Cli, DemoRunsOnTheEmbeddedDefault) {
   testing::TemporaryDirectory dir;
-  const CommandResult run = glaze("demo", dir);
+  const CommandResult run = glaze("demo --out " + dir.file("demo") + " --spp 16 --res 96x96", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_NE(run.out.find("white furnace"), std::string::npos);
+  EXPECT_NE(run.out.find("recovered against true"), std::string::npos) << run.out;
+  const nlohmann::json fit = nlohmann::json::parse(std::ifstream(dir.file("demo/fit/fit.json")));
+  EXPECT_NEAR(fit["R0"].get<double>(), 0.0452, 0.005);
+  EXPECT_NEAR(fit["Rd"][0].get<double>(), 0.9765, 0.01);
+  EXPECT_EQ(fit["holdout"].size(), 2u);
 }
 
 }  // namespace

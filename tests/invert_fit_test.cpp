@@ -83,5 +83,107 @@ TEST(InvertFit, PathTracedCapturesUnderRealMaps) {
   }
 }
 
+// Scales every frame of the capture set in `folder` by `transform(pixel value, rng)`.
+template <typename Transform>
+void rewrite_frames(const std::string& folder, Transform transform) {
+  const nlohmann::json transforms = read_json(folder + "/transforms.json");
+  Pcg32 rng(7);
+  for (const auto& frame : transforms["frames"]) {
+    const std::string file = folder + "/" + frame["file_path"].get<std::string>();
+    Image image = read_image(file);
+    for (float& value : image.pixels) value = transform(value, rng);
+    write_image(file, image);
+  }
+}
+
+// A copy of red_sphere_office.gltf with material (R0, Rd), written into dir.
+std::string sphere_scene_file(const TemporaryDirectory& dir, float R0, const RGB& Rd) {
+  nlohmann::json scene = read_json(kScenes + "red_sphere_office.gltf");
+  scene["materials"][0]["extras"]["glaze"] = {{"R0", R0}, {"Rd", {Rd[0], Rd[1], Rd[2]}}};
+  scene["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {Rd[0], Rd[1], Rd[2], 1.0};
+  const std::string file = dir.file("sphere.gltf");
+  std::ofstream(file) << scene.dump();
+  return file;
+}
+
+TEST(InvertFit, TexturedSphereTexelsWithinTwoPercent) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "textured_sphere_office.gltf", "textured", "--spp 256 --res 192x192 --holdout novel_0,novel_1");
+  const nlohmann::json result = fit(dir, folder, "--mode texture --texture-res 64x32");
+  EXPECT_NEAR(result["R0"].get<double>(), 0.04, 0.002);
+  EXPECT_LT(result["texture_rmse"].get<double>(), 0.02);
+  EXPECT_GT(result["coverage"].get<double>(), 0.5);  // four views around the equator: not the poles
+  std::printf("texture: texel RMSE %.4f over the known texels, coverage %.1f%%\n", result["texture_rmse"].get<double>(),
+              100 * result["coverage"].get<double>());
+  EXPECT_EQ(result["holdout"].size(), 2u);
+  const Image texture = read_image(folder + "/fit/texture.exr");
+  EXPECT_EQ(texture.width, 64);
+}
+
+TEST(InvertFit, FivePercentNoiseKeepsEstimatesWithinOnePercent) {
+  TemporaryDirectory dir;
+  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_blue_room.gltf"}) {
+    SCOPED_TRACE(scene);
+    const std::string folder = captures(dir, scene, std::string("noisy_") + scene, "--integrator sh --ss 1 --res 96x96");
+    rewrite_frames(folder, [](float value, Pcg32& rng) {
+      // Gaussian by Box-Muller, 5% multiplicative
+      const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
+      return value * (1.0f + 0.05f * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
+    });
+    expect_material(fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
+  }
+}
+
+TEST(InvertFit, MisregisteredViewShowsInResidualsAndRobustLossCopes) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "red_sphere_office.gltf", "shifted", "--integrator sh --ss 2 --res 128x128");
+  // Move view 1's principal point by one pixel: its camera no longer matches its image.
+  nlohmann::json transforms = read_json(folder + "/transforms.json");
+  const double cx = transforms["cx"].get<double>();
+  for (size_t f = 0; f < transforms["frames"].size(); ++f) {
+    for (const char* key : {"w", "h", "fl_x", "fl_y", "cy"}) transforms["frames"][f][key] = transforms[key];
+    transforms["frames"][f]["cx"] = f == 1 ? cx + 1.0 : cx;
+  }
+  for (const char* key : {"w", "h", "fl_x", "fl_y", "cx", "cy"}) transforms.erase(key);
+  std::ofstream(folder + "/transforms.json") << transforms.dump(2);
+
+  const nlohmann::json plain = fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 2");
+  const auto& views = plain["views"];
+  for (size_t f = 0; f < views.size(); ++f)
+    if (f != 1) {
+      EXPECT_GT(views[1]["rms"].get<double>(), 3 * views[f]["rms"].get<double>()) << "view " << f;
+    }
+  const nlohmann::json robust = fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 2 --loss cauchy --loss-scale 0.02");
+  expect_material(robust, 0.005, 0.01);
+  std::printf("one view off by a pixel: R0 %.4f plain, %.4f robust (true 0.0452)\n", plain["R0"].get<double>(),
+              robust["R0"].get<double>());
+}
+
+TEST(InvertFit, ParametersAtTheirBoundsAreRecoveredAtTheBounds) {
+  TemporaryDirectory dir;
+  const std::string scene = sphere_scene_file(dir, 0.0f, RGB(1.0f, 0.0f, 0.5f));
+  const CommandResult render = glaze("render " + scene + " --captures " + dir.file("bounds") + " --integrator sh --ss 1 --res 96x96", dir);
+  ASSERT_EQ(render.exit_code, 0) << render.err;
+  const nlohmann::json result = fit(dir, dir.file("bounds"), "--mode material --lmax 4 --pixel-footprint 1");
+  EXPECT_NEAR(result["R0"].get<double>(), 0.0, 1e-6);
+  EXPECT_EQ(result["Rd"][0].get<double>(), 1.0);
+  EXPECT_EQ(result["Rd"][1].get<double>(), 0.0);
+  EXPECT_NEAR(result["Rd"][2].get<double>(), 0.5, 1e-4);
+}
+
+TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "red_sphere_office.gltf", "black", "--integrator sh --ss 1 --res 48x48");
+  rewrite_frames(folder, [](float, Pcg32&) { return 0.0f; });
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "black");
+
+  const std::string saturated = captures(dir, "red_sphere_office.gltf", "saturated", "--integrator sh --ss 1 --res 48x48");
+  nlohmann::json transforms = read_json(saturated + "/transforms.json");
+  transforms["saturation"] = 1e-6;
+  std::ofstream(saturated + "/transforms.json") << transforms.dump(2);
+  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode material --out " + dir.file("y"), dir), "saturated");
+  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode shiny --out " + dir.file("y"), dir), "shiny");
+}
+
 }  // namespace
 }  // namespace glaze
