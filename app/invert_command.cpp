@@ -130,6 +130,15 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   if (mode == "material") {
     result["Rd"] = rgb_json(fit.Rd[0]);
     result["Rd_unclamped"] = rgb_json(fit.Rd_unclamped[0]);
+    // A channel no sample's diffuse term reaches (R0 = 1: a pure mirror) is unknown.
+    result["Rd_constrained"] = nlohmann::json::array();
+    for (int c = 0; c < 3; ++c) {
+      const bool constrained = fit.constraint[0][c] > 1e-12 * std::max(1.0, fit.constraint[0].maxCoeff());
+      result["Rd_constrained"].push_back(constrained);
+      if (!constrained)
+        warn(std::string("Rd ") + "RGB"[c] + " is not constrained by the data (no diffuse reflection seen: R0 = " +
+             std::to_string(fit.R0) + "); it is reported as 0");
+    }
   } else {
     const auto [width, height] = args.resolution("texture-res", {256, 128});
     result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};

@@ -30,7 +30,8 @@ namespace glaze {
 // mean over its footprint, here `footprint` x `footprint` rays at the centres of a grid
 // (the sh integrator's --ss positions). The mirror term is averaged over those rays; the
 // diffuse term, smooth across a pixel, takes E at the centre normal. footprint 1 is the
-// centre ray alone. Point samples always use their own ray.
+// centre ray alone. A point sample, read bilinearly between four pixel centres, is
+// modelled as the same bilinear blend of those four pixels' models.
 using ShadingTerms = std::array<ShadingBasis<float>, 3>;
 std::vector<ShadingTerms> shading_terms(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
                                         const Environment& environment, int lmax, int footprint);

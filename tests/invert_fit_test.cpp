@@ -63,7 +63,7 @@ TEST(InvertFit, ShCapturesRecoverTheMaterialExactly) {
 
 void path_traced_round_trip(const std::string& scene, const std::string& environment) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, scene, "path", "--spp 256 --res 128x128 " + environment);
+  const std::string folder = captures(dir, scene, "path", "--spp 256 --res 96x96 " + environment);
   expect_material(fit(dir, folder, "--mode material"), 0.002, 0.005);
 }
 
@@ -169,6 +169,51 @@ TEST(InvertFit, ParametersAtTheirBoundsAreRecoveredAtTheBounds) {
   EXPECT_EQ(result["Rd"][0].get<double>(), 1.0);
   EXPECT_EQ(result["Rd"][1].get<double>(), 0.0);
   EXPECT_NEAR(result["Rd"][2].get<double>(), 0.5, 1e-4);
+}
+
+TEST(InvertFit, PointSamplesRecoverTheMaterial) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "white_sphere_office.gltf", "points", "--integrator sh --ss 1 --res 128x128");
+  const nlohmann::json result = fit(dir, folder, "--mode material --lmax 4 --points 4000 --pixel-footprint 1");
+  // Read bilinearly between pixel centres, and modelled so: exact again.
+  expect_material(result, 1e-4, 1e-4);
+  EXPECT_GT(result["samples"].get<int>(), 4000);  // each point seen in several views
+  EXPECT_GT(result["dropped"]["hidden"].get<int>(), 1000);  // the far side of the sphere
+}
+
+TEST(InvertFit, PureMirrorRecoversROneAndSaysRdIsUnconstrained) {
+  TemporaryDirectory dir;
+  const std::string scene = sphere_scene_file(dir, 1.0f, RGB(0.3f, 0.6f, 0.9f));
+  const CommandResult render = glaze("render " + scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 64x64", dir);
+  ASSERT_EQ(render.exit_code, 0) << render.err;
+  const CommandResult run = glaze("invert-fit " + dir.file("mirror") + " --mode material --lmax 4 --pixel-footprint 1 --out " + dir.file("fit"), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json result = read_json(dir.file("fit/fit.json"));
+  EXPECT_NEAR(result["R0"].get<double>(), 1.0, 1e-6);
+  EXPECT_FALSE(result["Rd_constrained"][0].get<bool>());
+  EXPECT_NE(run.err.find("not constrained"), std::string::npos) << run.err;
+}
+
+TEST(InvertFit, BadCaptureSetsGiveClearErrors) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "red_sphere_office.gltf", "bad", "--integrator sh --ss 1 --res 48x48");
+  // An image whose size differs from its camera.
+  nlohmann::json transforms = read_json(folder + "/transforms.json");
+  write_image(folder + "/small.exr", Image(16, 16));
+  nlohmann::json resized = transforms;
+  resized["frames"][0]["file_path"] = "small.exr";
+  std::ofstream(folder + "/transforms.json") << resized.dump();
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "small.exr");
+  // The object placed where no camera sees it.
+  nlohmann::json moved = transforms;
+  moved["object"]["center"] = {0.0, 50.0, 0.0};
+  std::ofstream(folder + "/transforms.json") << moved.dump();
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "not visible");
+  // No lighting to fit under.
+  nlohmann::json dark = transforms;
+  dark.erase("environment");
+  std::ofstream(folder + "/transforms.json") << dark.dump();
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "--env");
 }
 
 TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
