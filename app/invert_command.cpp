@@ -7,6 +7,7 @@
 #include "app/arguments.h"
 #include "app/commands.h"
 #include "inverse/capture_scene.h"
+#include "inverse/lighting_fit.h"
 #include "inverse/material_fit.h"
 #include "inverse/samples.h"
 #include "inverse/texture_fit.h"
@@ -22,6 +23,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <tuple>
 
 namespace glaze {
 namespace {
@@ -69,23 +72,190 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
   return views;
 }
 
+// What every mode starts from: the capture set, its object in the renderer's ray
+// tracer, and the samples.
+struct FitInputs {
+  CaptureSet captures;
+  Scene scene;
+  std::unique_ptr<RayTracer> tracer;
+  SampleSet samples;
+};
+
+FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds) {
+  FitInputs in;
+  in.captures = read_transforms(args.positionals()[0]);
+  in.scene = capture_object_scene(in.captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  in.tracer = std::make_unique<RayTracer>(in.scene);
+  SampleOptions sample_options;
+  sample_options.min_cos = args.real("min-cos", sample_options.min_cos);
+  sample_options.points = static_cast<int>(args.integer("points", 0, 0, 1 << 26));
+  sample_options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
+  const auto stage = Clock::now();
+  in.samples = collect_samples(in.captures, *in.tracer, in.scene, sample_options);
+  stage_seconds["samples"] = seconds_since(stage);
+  const DropCounts dropped = in.samples.total_dropped();
+  std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
+              in.samples.samples.size(), in.captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
+              dropped.saturated, dropped.masked, dropped.hidden);
+  return in;
+}
+
+// Writes fit.json (and the solver's report) atomically.
+void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report) {
+  if (!solver_report.empty()) {
+    std::ofstream report(out / "solver.txt");
+    report << solver_report;
+    if (!report) throw Error((out / "solver.txt").string() + ": could not be written");
+  }
+  const std::filesystem::path target = out / "fit.json", temporary = out / ".fit.json.tmp";
+  {
+    std::ofstream file(temporary);
+    file << result.dump(2) << '\n';
+    if (!file) throw Error(target.string() + ": could not be written");
+  }
+  std::filesystem::rename(temporary, target);
+}
+
+// Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout).
+void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
+                   int footprint, const std::filesystem::path& out, nlohmann::json& result) {
+  result["renders"] = rerender(in.captures.frames, scene, *in.tracer, environment, lmax, footprint, out, "view");
+  const std::filesystem::path holdout = args.has("holdout") ? std::filesystem::path(args.text("holdout", ""))
+                                                            : std::filesystem::path(in.captures.directory) / "holdout";
+  if (args.has("holdout") || std::filesystem::exists(holdout / "transforms.json")) {
+    const CaptureSet held_out = read_transforms(holdout.string());
+    result["holdout"] = rerender(held_out.frames, scene, *in.tracer, environment, lmax, footprint, out, "holdout");
+  }
+}
+
+// The known material of --mode lighting: --R0 and --Rd, else the capture set's.
+PolishedMaterial known_material(const Arguments& args, const CaptureSet& captures) {
+  float R0 = -1.0f;
+  RGB Rd = RGB::Constant(-1.0f);
+  if (captures.material.contains("R0")) R0 = captures.material["R0"].get<float>();
+  if (captures.material.contains("Rd"))
+    for (int c = 0; c < 3; ++c) Rd[c] = captures.material["Rd"][c].get<float>();
+  R0 = args.real("R0", R0);
+  if (args.has("Rd")) {
+    const std::vector<float> values = args.reals("Rd");
+    if (values.size() != 3) throw Error("option --Rd needs three comma-separated numbers r,g,b");
+    Rd = RGB(values[0], values[1], values[2]);
+  }
+  if (R0 < 0.0f || (Rd < 0.0f).any())
+    throw Error(captures.directory + "/transforms.json has no \"material\": --mode lighting needs the object's material; give --R0 x --Rd r,g,b");
+  return PolishedMaterial(R0, Rd);  // validates the ranges
+}
+
+// --mode lighting: the lighting from an object of known material.
+int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
+  const auto start = Clock::now();
+  nlohmann::json stage_seconds;
+  FitInputs in = prepare_inputs(args, stage_seconds);
+  const PolishedMaterial material = known_material(args, in.captures);
+  const int lmax = static_cast<int>(args.integer("lmax", 4, 0, 8));
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
+  LightingFitOptions options;
+  std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
+  options.ridge = args.real("ridge", float(options.ridge));
+  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", {options.solve_width, options.solve_height});
+
+  auto stage = Clock::now();
+  const LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
+  stage_seconds["gather"] = seconds_since(stage);
+  stage = Clock::now();
+  const LightingFit fit = fit_lighting(data, material.R0(), material.Rd(), options);
+  stage_seconds["fit"] = seconds_since(stage);
+
+  std::filesystem::create_directories(out);
+  const std::string map_file = (out / "lighting.exr").string(), mask_file = (out / "lighting_coverage.png").string();
+  write_image(map_file, fit.map, {{"glaze:lmax", std::to_string(lmax)}});
+  Image mask(fit.map.width, fit.map.height);
+  for (size_t t = 0; t < fit.covered.size(); ++t)
+    for (int c = 0; c < 3; ++c) mask.pixels[3 * t + c] = fit.covered[t];
+  write_image(mask_file, mask);
+  nlohmann::json L = nlohmann::json::array();
+  for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
+  nlohmann::json result = {{"mode", "lighting"}, {"R0", material.R0()}, {"Rd", rgb_json(material.Rd())}, {"lmax", lmax},
+                           {"L_lm", L}, {"condition_number", fit.condition}, {"ridge", options.ridge},
+                           {"normal_coverage", data.normal_coverage}, {"map", map_file}, {"coverage_mask", mask_file},
+                           {"map_resolution", {options.width, options.height}}, {"solve_resolution", {options.solve_width, options.solve_height}}, {"covered_fraction", fit.covered_fraction},
+                           {"mirror_share", fit.mirror_share}, {"multi_view_fraction", fit.multi_view_fraction},
+                           {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"}, {"samples", in.samples.samples.size()},
+                           {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint}};
+  if (fit.condition > 1e6)
+    warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
+         std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
+  if (options.solve_width > 0 && !fit.map_consistent)
+    warn("only " + std::to_string(int(100 * fit.multi_view_fraction)) +
+         "% of the reflected directions are seen from two or more views: the mirror and the diffuse term cannot be "
+         "told apart there, so L_lm comes from the SH-only least squares (less accurate where the mirror dominates); "
+         "add views from other directions");
+  if (fit.mirror_share < 0.1)
+    warn("the mirror reflection carries only " + std::to_string(int(100 * fit.mirror_share)) +
+         "% of the observed light: the object is matte-like, so only the low frequencies (the SH part) are reliable; "
+         "the high-resolution map is noisy");
+
+  // Against the set's own lighting, when it names one: what a known-truth experiment checks.
+  if (const std::optional<EnvironmentSpec> truth = capture_environment(in.captures)) {
+    const Environment environment = make_environment(truth->source, truth->options, truth->width, truth->height);
+    const ShCoefficients& reference = environment.sh(lmax);
+    double worst = 0.0;
+    for (int i = 0; i < sh_count(std::min(lmax, 2)); ++i)
+      worst = std::max(worst, ((fit.coefficients.values[i] - reference.values[i]).abs() / reference.values[0].abs().max(1e-12)).maxCoeff());
+    result["reference_L_lm_error_l2"] = worst;  // max |L_lm - true| / L00 over l <= 2
+    for (const auto& [w, h] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
+      if (options.width % w != 0 || options.height % h != 0) continue;
+      int cells = 0;
+      const double error = map_error(fit, environment, w, h, &cells);
+      result["reference_map_error"][std::to_string(w) + "x" + std::to_string(h)] = {{"relative_rmse", error}, {"cells", cells}};
+    }
+  }
+
+  stage = Clock::now();
+  const Environment recovered(fit.map, {}, "recovered lighting");
+  for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
+  write_renders(args, in, in.scene, recovered, lmax, footprint, out, result);
+  stage_seconds["renders"] = seconds_since(stage);
+  result["stage_seconds"] = stage_seconds;
+  result["seconds"] = seconds_since(start);
+  write_fit(out, result, "");
+  std::printf("lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
+              lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
+              100 * fit.mirror_share);
+  if (result.contains("reference_L_lm_error_l2"))
+    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00; map relative RMSE at 64x32 %.2f%% over %d covered cells\n",
+                100 * result["reference_L_lm_error_l2"].get<double>(),
+                100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
+                result["reference_map_error"]["64x32"]["cells"].get<int>());
+  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  return 0;
+}
+
 }  // namespace
 
 int command_invert_fit(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
-                             "env-scale", "env-rotation", "holdout", "seed", "max-iterations", "pixel-footprint"});
+                             "env-scale", "env-rotation", "holdout", "seed", "max-iterations", "pixel-footprint", "R0",
+                             "Rd", "env-res", "ridge", "solve-res"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
-    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture --out DIR (see `glaze help`)");
+    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting --out DIR (see `glaze help`)");
   const std::string mode = args.text("mode", "");
-  if (mode == "lighting" || mode == "joint")
-    throw Error("--mode " + mode + " (lighting recovery) is not implemented yet; known-lighting modes: material, texture");
-  if (mode != "material" && mode != "texture") throw Error("unknown mode '" + mode + "' (known: material, texture)");
+  if (mode == "joint") throw Error("--mode joint (material and lighting together) is not implemented yet");
+  if (mode != "material" && mode != "texture" && mode != "lighting")
+    throw Error("unknown mode '" + mode + "' (known: material, texture, lighting)");
   if (mode != "texture" && args.has("texture-res")) throw Error("--texture-res applies to --mode texture");
+  if (mode != "lighting" && (args.has("R0") || args.has("Rd") || args.has("env-res") || args.has("ridge") || args.has("solve-res")))
+    throw Error("--R0, --Rd, --env-res, --solve-res and --ridge apply to --mode lighting");
+  if (mode == "lighting") return invert_lighting(args, std::filesystem::path(args.text("out", "")));
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
 
-  // Inputs: the capture set, its object and its (known) lighting.
-  const CaptureSet captures = read_transforms(args.positionals()[0]);
+  // The known lighting: the set's, or --env.
+  FitInputs in = prepare_inputs(args, stage_seconds);
+  const CaptureSet& captures = in.captures;
+  Scene& scene = in.scene;
+  const RayTracer& tracer = *in.tracer;
+  const SampleSet& samples = in.samples;
   std::optional<EnvironmentSpec> spec = capture_environment(captures);
   if (args.has("env")) spec = EnvironmentSpec{args.text("env", ""), spec ? spec->options : EnvironmentOptions{}};
   if (!spec)
@@ -94,25 +264,12 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   spec->options.scale = args.real("env-scale", spec->options.scale);
   spec->options.rotation_degrees = args.real("env-rotation", spec->options.rotation_degrees);
   const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);
-  Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
-  const RayTracer tracer(scene);
-
-  SampleOptions sample_options;
-  sample_options.min_cos = args.real("min-cos", sample_options.min_cos);
-  sample_options.points = static_cast<int>(args.integer("points", 0, 0, 1 << 26));
-  sample_options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
-  auto stage = Clock::now();
-  const SampleSet samples = collect_samples(captures, tracer, scene, sample_options);
-  stage_seconds["samples"] = seconds_since(stage);
   const DropCounts dropped = samples.total_dropped();
-  std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
-              samples.samples.size(), captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
-              dropped.saturated, dropped.masked, dropped.hidden);
 
   // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
   // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
   const int lmax = static_cast<int>(args.integer("lmax", 16, 0, kShMaxLmax));
-  stage = Clock::now();
+  auto stage = Clock::now();
   const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
   const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
   stage_seconds["shading_terms"] = seconds_since(stage);
@@ -194,27 +351,11 @@ int command_invert_fit(const std::vector<std::string>& raw) {
       scene.textures = {Texture{"recovered texture", texture->Rd}};
     }
   }
-  result["renders"] = rerender(captures.frames, scene, tracer, environment, lmax, footprint, out, "view");
-  std::filesystem::path holdout = args.has("holdout") ? std::filesystem::path(args.text("holdout", ""))
-                                                      : std::filesystem::path(captures.directory) / "holdout";
-  if (args.has("holdout") || std::filesystem::exists(holdout / "transforms.json")) {
-    const CaptureSet held_out = read_transforms(holdout.string());
-    result["holdout"] = rerender(held_out.frames, scene, tracer, environment, lmax, footprint, out, "holdout");
-  }
+  write_renders(args, in, scene, environment, lmax, footprint, out, result);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
   result["seconds"] = seconds_since(start);
-
-  {
-    std::ofstream report(out / "solver.txt");
-    report << fit.full_report;
-    const std::filesystem::path target = out / "fit.json", temporary = out / ".fit.json.tmp";
-    std::ofstream file(temporary);
-    file << result.dump(2) << '\n';
-    file.close();
-    if (!file || !report) throw Error(target.string() + ": could not be written");
-    std::filesystem::rename(temporary, target);
-  }
+  write_fit(out, result, fit.full_report);
 
   std::printf("R0 = %.5f", fit.R0);
   if (!texture) std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);

@@ -32,9 +32,10 @@ usage:
                                  path-trace a glTF scene's cameras / a capture set
   glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR
                                  error against run time: path tracer and sh integrator
-  glaze invert-fit CAPTURES/transforms.json --mode material|texture --out DIR [options]
+  glaze invert-fit CAPTURES/transforms.json --mode material|texture|lighting --out DIR [options]
                                  recover the material (or R0 and a diffuse texture)
-                                 from a capture set under its known lighting
+                                 under known lighting, or the lighting from an object
+                                 of known material
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -74,8 +75,13 @@ options of `invert-fit`:
                       (radiance; default 0.05)
   --texture-res WxH   texels of --mode texture (default 256x128)
   --holdout DIR       held-out captures to re-render (default: CAPTURES/holdout)
+  --mode lighting:    --R0 x --Rd r,g,b (default: the set's material), --lmax N
+                      (default 4), --env-res WxH (recovered map, default 256x128),
+                      --solve-res WxH (map solved with L_lm, default 64x32),
+                      --ridge R (relative Tikhonov weight, default 1e-6)
   Writes DIR/fit.json, solver.txt, render_view_NNN.exr and residual_view_NNN.exr
-  (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture.
+  (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
+  lighting.exr and lighting_coverage.png for --mode lighting.
 
 options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
   --ref-spp N         path-trace the reference at N spp, in two halves whose

@@ -1,6 +1,7 @@
 #include "inverse/material_fit.h"
 
 #include "inverse/diffuse_solve.h"
+#include "inverse/footprint.h"
 #include "renderer/error.h"
 #include "renderer/shading.h"
 #include "renderer/sh.h"
@@ -16,45 +17,23 @@ std::vector<ShadingTerms> shading_terms(const SampleSet& samples, const CaptureS
                                         const Environment& environment, int lmax, int footprint) {
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
   const ShDiffuseSum diffuse_sum(environment.sh(lmax));
-  // The model of pixel (px, py): the mirror term averaged over footprint^2 rays, E at the
-  // normal seen through the pixel centre.
-  auto pixel_terms = [&](const PinholeCamera& camera, int px, int py) {
-    ShadingTerms terms;
-    const std::optional<SurfaceHit> centre = tracer.intersect(camera.generate_ray(px + 0.5f, py + 0.5f));
-    if (!centre) return terms;  // cannot happen for the interior pixels samples come from
-    const RGB E = diffuse_sum(centre->normal);
-    int rays = 0;
-    for (int j = 0; j < footprint; ++j)
-      for (int i = 0; i < footprint; ++i) {
-        const Ray ray = camera.generate_ray(px + (i + 0.5f) / footprint, py + (j + 0.5f) / footprint);
-        const std::optional<SurfaceHit> hit = tracer.intersect(ray);
-        if (!hit) continue;
-        const float mu = hit->normal.dot(-ray.direction);
-        const RGB L = environment.eval(reflect(-ray.direction, hit->normal));
-        for (int c = 0; c < 3; ++c) terms[c] += ShadingBasis<float>(mu, L[c], E[c]);
-        ++rays;
-      }
-    for (int c = 0; c < 3; ++c) terms[c] *= 1.0f / std::max(rays, 1);
-    return terms;
-  };
   std::vector<ShadingTerms> terms(samples.samples.size());
   tbb::parallel_for(size_t(0), samples.samples.size(), [&](size_t k) {
-    const Sample& s = samples.samples[k];
-    const PinholeCamera& camera = captures.frames[s.frame].camera;
-    if (samples.pixels) {
-      terms[k] = pixel_terms(camera, int(std::floor(s.film.x())), int(std::floor(s.film.y())));
-      return;
-    }
-    // A point was read bilinearly between four pixel centres: so is its model.
-    const float x = s.film.x() - 0.5f, y = s.film.y() - 0.5f;
-    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-    const float tx = x - x0, ty = y - y0;
-    for (int dy = 0; dy <= 1; ++dy)
-      for (int dx = 0; dx <= 1; ++dx) {
-        const float weight = (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty);
-        ShadingTerms pixel = pixel_terms(camera, x0 + dx, y0 + dy);
-        for (int c = 0; c < 3; ++c) terms[k][c] += (pixel[c] *= weight);
-      }
+    // The mirror term averaged over the footprint's rays; E, smooth across a pixel, at the
+    // normal seen through its centre.
+    for_each_model_pixel(samples, k, captures, tracer, footprint,
+                         [&](const SurfaceHit& centre, const std::vector<FootprintRay>& rays, float weight) {
+                           const RGB E = diffuse_sum(centre.normal);
+                           const float share = weight / rays.size();
+                           for (const FootprintRay& ray : rays) {
+                             const RGB L = environment.eval(reflect(ray.view, ray.hit.normal));
+                             const float mu = ray.hit.normal.dot(ray.view);
+                             for (int c = 0; c < 3; ++c) {
+                               ShadingBasis<float> basis(mu, L[c], E[c]);
+                               terms[k][c] += (basis *= share);
+                             }
+                           }
+                         });
   });
   return terms;
 }

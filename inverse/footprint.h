@@ -1,0 +1,57 @@
+// footprint.h: which rays model an observation. A pixel records the mean radiance over
+// its area, so a pixel sample is modelled by `footprint` x `footprint` rays at the centres
+// of a grid over the pixel (the sh integrator's --ss positions); a point sample, read
+// bilinearly between four pixel centres, by the same bilinear blend of those pixels.
+// The material fit and the lighting fit build their models from these rays, so that
+// both see a pixel the same way.
+#pragma once
+
+#include "inverse/samples.h"
+
+#include <cmath>
+#include <vector>
+
+namespace glaze {
+
+struct FootprintRay {
+  SurfaceHit hit;
+  Vec3 view;  // unit, towards the camera
+};
+
+// Calls pixel(centre, rays, weight) for every pixel that models sample k: `centre` the
+// hit through the pixel centre, `rays` the footprint rays that hit the object, `weight`
+// the pixel's share of the sample (1 for a pixel sample, bilinear for a point). Each
+// ray's own share is weight / rays.size().
+template <typename PixelVisit>
+void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& captures, const RayTracer& tracer,
+                          int footprint, PixelVisit&& pixel) {
+  const Sample& s = samples.samples[k];
+  const PinholeCamera& camera = captures.frames[s.frame].camera;
+  std::vector<FootprintRay> rays;
+  auto visit = [&](int px, int py, float weight) {
+    const std::optional<SurfaceHit> centre = tracer.intersect(camera.generate_ray(px + 0.5f, py + 0.5f));
+    if (!centre || weight == 0.0f) return;  // interior pixels always hit; kept safe
+    rays.clear();
+    if (footprint == 1) {  // the centre ray itself
+      rays.push_back({*centre, -camera.generate_ray(px + 0.5f, py + 0.5f).direction});
+    } else {
+      for (int j = 0; j < footprint; ++j)
+        for (int i = 0; i < footprint; ++i) {
+          const Ray ray = camera.generate_ray(px + (i + 0.5f) / footprint, py + (j + 0.5f) / footprint);
+          if (const std::optional<SurfaceHit> hit = tracer.intersect(ray)) rays.push_back({*hit, -ray.direction});
+        }
+    }
+    if (!rays.empty()) pixel(*centre, rays, weight);
+  };
+  if (samples.pixels) {
+    visit(int(std::floor(s.film.x())), int(std::floor(s.film.y())), 1.0f);
+    return;
+  }
+  const float x = s.film.x() - 0.5f, y = s.film.y() - 0.5f;
+  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  const float tx = x - x0, ty = y - y0;
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) visit(x0 + dx, y0 + dy, (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty));
+}
+
+}  // namespace glaze

@@ -1,0 +1,317 @@
+#include "inverse/lighting_fit.h"
+
+#include "inverse/footprint.h"
+#include "renderer/error.h"
+#include "renderer/latlong.h"
+#include "renderer/shading.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace glaze {
+namespace {
+
+// Samples are gathered in fixed chunks whose sums are added in order: the moments do not
+// depend on the thread count.
+constexpr size_t kChunk = 2048;
+
+struct Moments {
+  Eigen::MatrixXd aa, ab, ac, bb, bc, cc, ao, bo, co;
+  explicit Moments(int n)
+      : aa(Eigen::MatrixXd::Zero(n, n)), ab(aa), ac(aa), bb(aa), bc(aa), cc(aa),
+        ao(Eigen::MatrixXd::Zero(n, 3)), bo(ao), co(ao) {}
+  Moments& operator+=(const Moments& m) {
+    aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co;
+    return *this;
+  }
+};
+
+}  // namespace
+
+LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
+                                  int footprint) {
+  if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
+  const int n = sh_count(lmax);
+  const size_t count = samples.samples.size();
+  std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
+  for (int l = 0; l <= lmax; ++l)
+    for (int m = -l; m <= l; ++m) kernel[sh_index(l, m)] = sh_lambda(l) * sh_kernel_coefficient(l);
+
+  LightingData data;
+  data.lmax = lmax;
+  data.c.assign(count * n, 0.0f);
+  data.reflected.resize(count);
+  data.mu.resize(count);
+  data.observed.resize(count);
+  data.frame.resize(count);
+  const size_t chunks = (count + kChunk - 1) / kChunk;
+  std::vector<Moments> partial(chunks, Moments(n));
+  tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
+    // The chunk's rows as columns of A, B, C and its observations as rows of O: the
+    // moments are then four matrix products (A A^T, ...), which Eigen vectorises.
+    const size_t first = chunk * kChunk, rows = std::min(count, first + kChunk) - first;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, rows), B = A, C = A, O(rows, 3);
+    Eigen::VectorXd y(n);
+    std::vector<float> basis(n);
+    for (size_t r = 0; r < rows; ++r) {
+      const size_t k = first + r;
+      for_each_model_pixel(samples, k, captures, tracer, footprint,
+                           [&](const SurfaceHit& centre, const std::vector<FootprintRay>& rays, float weight) {
+                             sh_eval<float>(lmax, centre.normal, basis);
+                             for (int i = 0; i < n; ++i) y[i] = basis[i] * kernel[i];  // Lambda h Y(n)
+                             const double share = weight / rays.size();
+                             for (const FootprintRay& ray : rays) {
+                               const double g = coat_transmittance_g(ray.hit.normal.dot(ray.view));
+                               sh_eval<float>(lmax, reflect(ray.view, ray.hit.normal), basis);
+                               for (int i = 0; i < n; ++i) {
+                                 A(i, r) += share * basis[i];
+                                 B(i, r) += share * g * basis[i];
+                                 C(i, r) += share * g * y[i];
+                               }
+                             }
+                           });
+      const Sample& s = samples.samples[k];
+      O.row(r) = s.observed.cast<double>().matrix().transpose();
+      for (int i = 0; i < n; ++i) data.c[k * n + i] = float(C(i, r));
+      data.reflected[k] = reflect(s.view, s.normal);
+      data.mu[k] = s.mu;
+      data.observed[k] = s.observed;
+      data.frame[k] = s.frame;
+    }
+    Moments& m = partial[chunk];
+    m.aa.noalias() = A * A.transpose(), m.ab.noalias() = A * B.transpose(), m.ac.noalias() = A * C.transpose();
+    m.bb.noalias() = B * B.transpose(), m.bc.noalias() = B * C.transpose(), m.cc.noalias() = C * C.transpose();
+    m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
+  });
+  Moments total(n);
+  for (const Moments& m : partial) total += m;
+  data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
+  data.ao = total.ao, data.bo = total.bo, data.co = total.co;
+
+  std::vector<uint8_t> seen(32 * 16, 0);
+  for (const Sample& s : samples.samples) {
+    const Vec2 uv = direction_to_latlong(s.normal);
+    seen[std::min(int(uv.y() * 16), 15) * 32 + std::min(int(uv.x() * 32), 31)] = 1;
+  }
+  // Cells weighted by their solid angle (sin theta), so that the poles do not count double.
+  double covered = 0.0, total_area = 0.0;
+  for (int j = 0; j < 16; ++j)
+    for (int i = 0; i < 32; ++i) {
+      const double area = std::sin(kPiD * (j + 0.5) / 16);
+      total_area += area;
+      if (seen[j * 32 + i]) covered += area;
+    }
+  data.normal_coverage = covered / total_area;
+  return data;
+}
+
+Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
+                                  double* condition) {
+  // Row = a - q b + s c with q = 1 - R0, s = 21/(20 pi) Rd q (shading.h's affine form).
+  const double q = 1.0 - R0, s = kDiffuseNormalisation * Rd * q;
+  const Eigen::MatrixXd normal = data.aa - q * (data.ab + data.ab.transpose()) + s * (data.ac + data.ac.transpose()) +
+                                 q * q * data.bb - q * s * (data.bc + data.bc.transpose()) + s * s * data.cc;
+  const Eigen::VectorXd rhs = data.ao.col(channel) - q * data.bo.col(channel) + s * data.co.col(channel);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  const double largest = eigen.eigenvalues().maxCoeff(), smallest = std::max(eigen.eigenvalues().minCoeff(), 0.0);
+  if (condition) *condition = smallest > 0.0 ? std::sqrt(largest / smallest) : INFINITY;
+  const double lambda = ridge * normal.diagonal().mean();
+  const Eigen::MatrixXd regularised = normal + lambda * Eigen::MatrixXd::Identity(normal.rows(), normal.cols());
+  return regularised.ldlt().solve(rhs);
+}
+
+namespace {
+
+// The lighting as a map, solved together with its SH coefficients (one channel).
+//
+// The SH-only least squares above models the mirror term with lmax-4 lighting, but the
+// mirror sees the full-resolution environment, and in the dark channels of a coloured
+// object, where the mirror dominates, its unmodelled high frequencies leak into L_lm.
+// Here the unknowns are instead the values T_t of a coarse lat-long map on the texels
+// that reflected rays reach (several samples each: the map is coarser than the samples);
+// texels no ray reaches hold the SH reconstruction, and L_lm is the map's own projection,
+// so it is consistent by construction:
+//   L = sum_covered Omega_t Y(t) T_t + sum_uncovered Omega_t Y(t) Y(t)^T L
+//     => L = G P T,  G = (I - P_u Y_u^T)^-1,  P = [Omega_t Y(t)] over covered texels.
+// Sample k predicts o_k = F_k T_t(k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0) c_k, which is
+// linear in T. The normal matrix is diagonal (the mirror) plus rank 50 (the diffuse
+// coupling), solved exactly by the Woodbury identity in O(texels x 50^2).
+Eigen::VectorXd solve_map_consistent(const LightingData& data, float R0, float Rd, int channel, int width, int height,
+                                     double ridge) {
+  const int n = sh_count(data.lmax);
+  const size_t count = data.observed.size();
+  const double q = 1.0 - R0, diffuse_scale = kDiffuseNormalisation * Rd * q;
+  auto texel_of = [&](const Vec3& direction) {
+    const Vec2 uv = direction_to_latlong(direction);
+    return std::min(int(uv.y() * height), height - 1) * width + std::min(int(uv.x() * width), width - 1);
+  };
+  // Covered texels and the per-texel sums.
+  std::vector<int> index(size_t(width) * height, -1);
+  std::vector<int> covered;
+  for (size_t k = 0; k < count; ++k) {
+    const int t = texel_of(data.reflected[k]);
+    if (index[t] < 0) index[t] = int(covered.size()), covered.push_back(t);
+  }
+  const int m = int(covered.size());
+  // sum d d^T and sum o d are the gathered moments of c, scaled.
+  const Eigen::MatrixXd M = diffuse_scale * diffuse_scale * data.cc;
+  const Eigen::VectorXd b2 = diffuse_scale * data.co.col(channel);
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(m), b1 = Eigen::VectorXd::Zero(m);
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, n);
+  for (size_t k = 0; k < count; ++k) {
+    const int i = index[texel_of(data.reflected[k])];
+    const double F = schlick_fresnel(double(R0), double(data.mu[k]));
+    diagonal[i] += F * F;
+    E.row(i) += (F * diffuse_scale) * Eigen::Map<const Eigen::VectorXf>(&data.c[k * n], n).cast<double>().transpose();
+    b1[i] += F * data.observed[k][channel];
+  }
+  // Projection weights of the texels (solid angle times the basis at the centre).
+  Eigen::MatrixXd P(n, m), uncovered = Eigen::MatrixXd::Zero(n, n);
+  std::vector<float> basis(n);
+  for (int t = 0; t < width * height; ++t) {
+    const int j = t / width;
+    const double solid_angle = 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
+    sh_eval<float>(data.lmax, latlong_to_direction(Vec2((t % width + 0.5f) / width, (j + 0.5f) / height)), basis);
+    const Eigen::Map<const Eigen::VectorXf> y(basis.data(), n);
+    if (index[t] >= 0) P.col(index[t]) = solid_angle * y.cast<double>();
+    else uncovered += solid_angle * y.cast<double>() * y.cast<double>().transpose();
+  }
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  const Eigen::MatrixXd Q = (I - uncovered + ridge * I).ldlt().solve(P);  // G P
+  // N = D + U C U^T with U = [E, Q^T], C = [[0, I], [I, M]]; C^-1 = [[-M, I], [I, 0]].
+  const Eigen::VectorXd D = diagonal.array() + ridge * std::max(diagonal.mean(), 1e-30);
+  Eigen::MatrixXd U(m, 2 * n);
+  U << E, Q.transpose();
+  Eigen::MatrixXd C_inverse = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  C_inverse.topLeftCorner(n, n) = -M;
+  C_inverse.topRightCorner(n, n) = I;
+  C_inverse.bottomLeftCorner(n, n) = I;
+  const Eigen::VectorXd rhs = b1 + Q.transpose() * b2;
+  const Eigen::MatrixXd D_inverse_U = U.array().colwise() / D.array();
+  const Eigen::VectorXd D_inverse_rhs = rhs.array() / D.array();
+  const Eigen::MatrixXd inner = C_inverse + U.transpose() * D_inverse_U;
+  const Eigen::VectorXd T = D_inverse_rhs - D_inverse_U * inner.fullPivLu().solve(U.transpose() * D_inverse_rhs);
+  return Q * T;
+}
+
+}  // namespace
+
+LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options) {
+  const int n = sh_count(data.lmax);
+  const size_t count = data.observed.size();
+  if (count < size_t(n))
+    throw Error("lighting recovery needs at least " + std::to_string(n) + " samples for lmax " + std::to_string(data.lmax) +
+                ", got " + std::to_string(count));
+  if (options.width < 1 || options.height < 1) throw Error("the lighting map needs a positive resolution");
+  LightingFit fit;
+  fit.coefficients = ShCoefficients(data.lmax);
+  Eigen::MatrixXd L(n, 3);
+  if (options.solve_width > 0) {
+    // Which views reflect into each texel of the solve map.
+    std::vector<int> first_view(size_t(options.solve_width) * options.solve_height, -1);
+    std::vector<uint8_t> several(first_view.size(), 0);
+    for (size_t k = 0; k < count; ++k) {
+      const Vec2 uv = direction_to_latlong(data.reflected[k]);
+      const size_t t = size_t(std::min(int(uv.y() * options.solve_height), options.solve_height - 1)) * options.solve_width +
+                       std::min(int(uv.x() * options.solve_width), options.solve_width - 1);
+      if (first_view[t] < 0) first_view[t] = data.frame[k];
+      else if (first_view[t] != data.frame[k]) several[t] = 1;
+    }
+    const double covered = double(std::count_if(first_view.begin(), first_view.end(), [](int v) { return v >= 0; }));
+    fit.multi_view_fraction = covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
+    fit.map_consistent = fit.multi_view_fraction >= 0.5;
+  }
+  std::array<double, 3> condition{};
+  tbb::parallel_for(0, 3, [&](int c) {  // the channels are independent
+    L.col(c) = solve_sh_lighting(data, R0, Rd[c], c, options.ridge, &condition[c]);
+    if (fit.map_consistent) L.col(c) = solve_map_consistent(data, R0, Rd[c], c, options.solve_width, options.solve_height, options.ridge);
+  });
+  fit.condition = *std::max_element(condition.begin(), condition.end());
+  for (int i = 0; i < n; ++i) fit.coefficients.values[i] = RGBd(L(i, 0), L(i, 1), L(i, 2));
+
+  // The high-resolution part: (o - diffuse) / F splatted along r with weight F^2.
+  const int width = options.width, height = options.height;
+  std::vector<RGBd> sum(size_t(width) * height, RGBd::Zero());
+  std::vector<double> weight(size_t(width) * height, 0.0);
+  double mirror_light = 0.0, all_light = 0.0;
+  const double q = 1.0 - R0;
+  for (size_t k = 0; k < count; ++k) {
+    const Eigen::Map<const Eigen::VectorXf> c(&data.c[k * n], n);
+    const Eigen::Vector3d diffuse = kDiffuseNormalisation * q * Rd.cast<double>().matrix().cwiseProduct(L.transpose() * c.cast<double>());
+    const RGBd mirror = data.observed[k].cast<double>() - diffuse.array();
+    const double F = schlick_fresnel(double(R0), double(data.mu[k]));
+    mirror_light += std::max(0.0, mirror.sum());
+    all_light += data.observed[k].cast<double>().sum();
+    if (!(F > 0.0)) continue;
+    const Vec2 uv = direction_to_latlong(data.reflected[k]);
+    const size_t texel = size_t(std::min(int(uv.y() * height), height - 1)) * width + std::min(int(uv.x() * width), width - 1);
+    sum[texel] += F * mirror;  // weight F^2 times the estimate mirror / F
+    weight[texel] += F * F;
+  }
+  fit.mirror_share = all_light > 0.0 ? mirror_light / all_light : 0.0;
+  fit.map = Image(width, height);
+  fit.covered.assign(size_t(width) * height, 0.0f);
+  size_t covered = 0;
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      const size_t texel = size_t(j) * width + i;
+      if (weight[texel] > 0.0) {
+        fit.map.set(i, j, (sum[texel] / weight[texel]).cast<float>().max(0.0));
+        fit.covered[texel] = 1.0f;
+        ++covered;
+      } else {
+        const Vec3 direction = latlong_to_direction(Vec2((i + 0.5f) / width, (j + 0.5f) / height));
+        fit.map.set(i, j, fit.coefficients.eval(direction).max(0.0f));
+      }
+    }
+  fit.covered_fraction = double(covered) / (double(width) * height);
+  return fit;
+}
+
+double map_error(const LightingFit& fit, const Environment& truth, int width, int height, int* cells) {
+  const Image& map = fit.map;
+  if (map.width % width != 0 || map.height % height != 0)
+    throw Error("the recovered map (" + std::to_string(map.width) + "x" + std::to_string(map.height) +
+                ") is not a multiple of the comparison grid " + std::to_string(width) + "x" + std::to_string(height));
+  const int sx = map.width / width, sy = map.height / height;
+  constexpr int kTruthSamples = 16;  // per side of a cell: the truth box-filtered finely
+  double squared = 0.0, reference = 0.0;
+  int compared = 0;
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      RGBd recovered = RGBd::Zero();
+      double area = 0.0;
+      bool all_covered = true;
+      for (int y = j * sy; y < (j + 1) * sy; ++y)
+        for (int x = i * sx; x < (i + 1) * sx; ++x) {
+          const double sin_theta = std::sin(kPiD * (y + 0.5) / map.height);
+          all_covered = all_covered && fit.covered[size_t(y) * map.width + x] > 0.0f;
+          recovered += sin_theta * map.at(x, y).cast<double>();
+          area += sin_theta;
+        }
+      if (!all_covered) continue;
+      recovered /= area;
+      // Solid-angle weighted mean of the true lighting over the cell.
+      RGBd expected = RGBd::Zero();
+      double total = 0.0;
+      for (int b = 0; b < kTruthSamples; ++b)
+        for (int a = 0; a < kTruthSamples; ++a) {
+          const Vec2 uv((i + (a + 0.5f) / kTruthSamples) / width, (j + (b + 0.5f) / kTruthSamples) / height);
+          float sin_theta = 0.0f;
+          const Vec3 direction = latlong_to_direction(uv, &sin_theta);
+          expected += sin_theta * truth.eval(direction).cast<double>();
+          total += sin_theta;
+        }
+      expected /= total;
+      squared += (recovered - expected).square().sum();
+      reference += expected.square().sum();
+      ++compared;
+    }
+  if (cells) *cells = compared;
+  return reference > 0.0 ? std::sqrt(squared / reference) : 0.0;
+}
+
+}  // namespace glaze

@@ -1,0 +1,87 @@
+// lighting_fit.h: lighting from an object of known material (DESIGN §5, paper section 6).
+//
+// 1. The SH part: with the material known, every observation is linear in the lighting's
+//    SH coefficients L_lm, through both terms of the shading model:
+//      o = F(n.v) sum L_lm Y_lm(r)  +  21/(20 pi) Rd (1 - R0) g(n.v) sum Lambda_l h_l L_lm Y_lm(n)
+//    (a pixel: the mean over its footprint). Linear least squares per channel, with a
+//    ridge term (documented below) for views that leave it ill-posed.
+// 2. The high-resolution part: subtract the predicted diffuse term from each observation,
+//    divide by F(n.v), and splat the result into a lat-long map along the reflected
+//    direction, weighted by F^2 (the mirror's share of the signal: the division amplifies
+//    noise by 1/F). Texels no sample reaches take the SH reconstruction and are marked
+//    uncovered.
+//
+// Everything material-independent is gathered in one pass (LightingData): the normal
+// equations for any (R0, Rd) are then assembled from moments in O(lmax^4), which the
+// joint fit relies on.
+#pragma once
+
+#include "inverse/samples.h"
+#include "renderer/environment.h"
+#include "renderer/image.h"
+#include "renderer/sh.h"
+
+#include <Eigen/Dense>
+
+namespace glaze {
+
+// Per sample, per SH index i, the model row is polished_radiance(R0, Rd, {a_i, b_i, c_i})
+// (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
+struct LightingData {
+  int lmax = 0;
+  // Moments over samples of the row parts a, b, c (shared by the channels) ...
+  Eigen::MatrixXd aa, ab, ac, bb, bc, cc;
+  // ... and their products with the observations, one column per channel.
+  Eigen::MatrixXd ao, bo, co;
+  // What the splat needs per sample: c (row-major, sh_count per sample), the reflected
+  // direction through the pixel centre and n.v there.
+  std::vector<float> c;
+  std::vector<Vec3> reflected;
+  std::vector<float> mu;
+  std::vector<RGB> observed;
+  std::vector<int> frame;
+  // Fraction of a 32 x 16 lat-long grid of normal directions that samples cover.
+  double normal_coverage = 0.0;
+};
+
+LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
+                                  int footprint);
+
+struct LightingFitOptions {
+  // Ridge (Tikhonov) weight, relative to the mean diagonal of the normal equations. Tiny:
+  // it leaves well-posed problems unchanged and keeps ill-posed ones (a single view, few
+  // normals) finite, pulling unseen coefficients towards 0 instead of towards noise.
+  double ridge = 1e-6;
+  int width = 256, height = 128;  // of the high-resolution map
+  // Of the map solved together with L_lm (0: the SH-only least squares alone).
+  int solve_width = 64, solve_height = 32;
+};
+
+struct LightingFit {
+  ShCoefficients coefficients;
+  double condition = 0.0;  // of the least-squares system before the ridge (worst channel)
+  Image map;               // lat-long, world frame (DESIGN §3)
+  std::vector<float> covered;  // per texel: 1 if samples reached it
+  double covered_fraction = 0.0;
+  double mirror_share = 0.0;  // fraction of the observed light the mirror term carries
+  // Fraction of the solve map's covered texels that two or more views reflect into; the
+  // map-consistent solve needs several views per direction to separate the mirror from
+  // the diffuse term, and falls back to the SH-only least squares below one half.
+  double multi_view_fraction = 0.0;
+  bool map_consistent = false;  // which solve gave L_lm
+};
+
+// Throws glaze::Error with fewer samples than unknowns.
+LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options);
+
+// Relative RMSE of the recovered map against a known environment, both box-filtered to
+// width x height cells (solid-angle weighted), over the cells whose every map texel
+// samples cover; `cells` receives how many were compared.
+double map_error(const LightingFit& fit, const Environment& truth, int width, int height, int* cells = nullptr);
+
+// The SH coefficients alone (step 1), for one channel's material; `condition` receives the
+// system's condition number.
+Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
+                                  double* condition);
+
+}  // namespace glaze
