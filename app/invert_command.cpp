@@ -7,6 +7,7 @@
 #include "app/arguments.h"
 #include "app/commands.h"
 #include "inverse/capture_scene.h"
+#include "inverse/joint_fit.h"
 #include "inverse/lighting_fit.h"
 #include "inverse/material_fit.h"
 #include "inverse/samples.h"
@@ -146,24 +147,31 @@ PolishedMaterial known_material(const Arguments& args, const CaptureSet& capture
   return PolishedMaterial(R0, Rd);  // validates the ranges
 }
 
-// --mode lighting: the lighting from an object of known material.
-int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
+// --mode lighting: the lighting from an object of known material; --mode joint: the
+// material and the lighting together.
+int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
-  const PolishedMaterial material = known_material(args, in.captures);
   const int lmax = static_cast<int>(args.integer("lmax", 4, 0, 8));
   const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
   LightingFitOptions options;
   std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
   options.ridge = args.real("ridge", float(options.ridge));
-  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", {options.solve_width, options.solve_height});
+  // The joint fit separates material from lighting by the variation within a texel of
+  // the solved map, so it takes a finer one (128x64 at 512x512 captures: still dozens of
+  // samples per texel); lighting alone is steadier on the coarser default.
+  const std::pair<int, int> solve_default = joint ? std::pair(128, 64) : std::pair(options.solve_width, options.solve_height);
+  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", solve_default);
 
   auto stage = Clock::now();
   const LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
   stage_seconds["gather"] = seconds_since(stage);
   stage = Clock::now();
-  const LightingFit fit = fit_lighting(data, material.R0(), material.Rd(), options);
+  std::optional<JointFit> joint_fit;
+  if (joint) joint_fit = fit_joint(data, options, static_cast<int>(args.integer("max-iterations", 100, 1, 10000)));
+  const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
+  const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
 
   std::filesystem::create_directories(out);
@@ -175,7 +183,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
   write_image(mask_file, mask);
   nlohmann::json L = nlohmann::json::array();
   for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
-  nlohmann::json result = {{"mode", "lighting"}, {"R0", material.R0()}, {"Rd", rgb_json(material.Rd())}, {"lmax", lmax},
+  nlohmann::json result = {{"mode", joint ? "joint" : "lighting"}, {"R0", material.R0()}, {"Rd", rgb_json(material.Rd())}, {"lmax", lmax},
                            {"L_lm", L}, {"condition_number", fit.condition}, {"ridge", options.ridge},
                            {"normal_coverage", data.normal_coverage}, {"map", map_file}, {"coverage_mask", mask_file},
                            {"map_resolution", {options.width, options.height}}, {"solve_resolution", {options.solve_width, options.solve_height}}, {"covered_fraction", fit.covered_fraction},
@@ -185,6 +193,12 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
   if (fit.condition > 1e6)
     warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
          std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
+  if (joint) {
+    result["iterations"] = joint_fit->iterations;
+    result["converged"] = joint_fit->converged;
+    result["rms"] = joint_fit->rms;
+    result["solver"] = joint_fit->brief_report;
+  }
   if (options.solve_width > 0 && !fit.map_consistent)
     warn("only " + std::to_string(int(100 * fit.multi_view_fraction)) +
          "% of the reflected directions are seen from two or more views: the mirror and the diffuse term cannot be "
@@ -203,6 +217,9 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
     for (int i = 0; i < sh_count(std::min(lmax, 2)); ++i)
       worst = std::max(worst, ((fit.coefficients.values[i] - reference.values[i]).abs() / reference.values[0].abs().max(1e-12)).maxCoeff());
     result["reference_L_lm_error_l2"] = worst;  // max |L_lm - true| / L00 over l <= 2
+    // The absolute scale: recovered over true L00, per channel.
+    result["reference_scale"] = rgb_json((fit.coefficients.values[0] / reference.values[0]).cast<float>());
+    if (!in.captures.material.is_null()) result["reference_material"] = in.captures.material;
     for (const auto& [w, h] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
       if (options.width % w != 0 || options.height % h != 0) continue;
       int cells = 0;
@@ -218,7 +235,10 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out) {
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
   result["seconds"] = seconds_since(start);
-  write_fit(out, result, "");
+  write_fit(out, result, joint ? joint_fit->full_report : "");
+  if (joint)
+    std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d iterations, %s)\n", material.R0(), material.Rd()[0],
+                material.Rd()[1], material.Rd()[2], joint_fit->iterations, joint_fit->converged ? "converged" : "NOT converged");
   std::printf("lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
               lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
               100 * fit.mirror_share);
@@ -238,15 +258,16 @@ int command_invert_fit(const std::vector<std::string>& raw) {
                              "env-scale", "env-rotation", "holdout", "seed", "max-iterations", "pixel-footprint", "R0",
                              "Rd", "env-res", "ridge", "solve-res"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
-    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting --out DIR (see `glaze help`)");
+    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");
   const std::string mode = args.text("mode", "");
-  if (mode == "joint") throw Error("--mode joint (material and lighting together) is not implemented yet");
-  if (mode != "material" && mode != "texture" && mode != "lighting")
-    throw Error("unknown mode '" + mode + "' (known: material, texture, lighting)");
+  if (mode != "material" && mode != "texture" && mode != "lighting" && mode != "joint")
+    throw Error("unknown mode '" + mode + "' (known: material, texture, lighting, joint)");
   if (mode != "texture" && args.has("texture-res")) throw Error("--texture-res applies to --mode texture");
-  if (mode != "lighting" && (args.has("R0") || args.has("Rd") || args.has("env-res") || args.has("ridge") || args.has("solve-res")))
-    throw Error("--R0, --Rd, --env-res, --solve-res and --ridge apply to --mode lighting");
-  if (mode == "lighting") return invert_lighting(args, std::filesystem::path(args.text("out", "")));
+  const bool lighting = mode == "lighting" || mode == "joint";
+  if (!lighting && (args.has("env-res") || args.has("ridge") || args.has("solve-res")))
+    throw Error("--env-res, --solve-res and --ridge apply to --mode lighting and joint");
+  if (mode != "lighting" && (args.has("R0") || args.has("Rd"))) throw Error("--R0 and --Rd give the known material of --mode lighting");
+  if (lighting) return invert_lighting(args, std::filesystem::path(args.text("out", "")), mode == "joint");
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
 

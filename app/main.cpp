@@ -32,10 +32,10 @@ usage:
                                  path-trace a glTF scene's cameras / a capture set
   glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR
                                  error against run time: path tracer and sh integrator
-  glaze invert-fit CAPTURES/transforms.json --mode material|texture|lighting --out DIR [options]
+  glaze invert-fit CAPTURES/transforms.json --mode material|texture|lighting|joint --out DIR [options]
                                  recover the material (or R0 and a diffuse texture)
-                                 under known lighting, or the lighting from an object
-                                 of known material
+                                 under known lighting, the lighting from an object of
+                                 known material, or both together (joint)
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -79,6 +79,7 @@ options of `invert-fit`:
                       (default 4), --env-res WxH (recovered map, default 256x128),
                       --solve-res WxH (map solved with L_lm, default 64x32),
                       --ridge R (relative Tikhonov weight, default 1e-6)
+  --mode joint:       as lighting, without the material; --solve-res default 128x64
   Writes DIR/fit.json, solver.txt, render_view_NNN.exr and residual_view_NNN.exr
   (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
   lighting.exr and lighting_coverage.png for --mode lighting.

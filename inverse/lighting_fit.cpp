@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 namespace glaze {
 namespace {
@@ -123,81 +124,78 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
   return regularised.ldlt().solve(rhs);
 }
 
-namespace {
-
-// The lighting as a map, solved together with its SH coefficients (one channel).
-//
-// The SH-only least squares above models the mirror term with lmax-4 lighting, but the
-// mirror sees the full-resolution environment, and in the dark channels of a coloured
-// object, where the mirror dominates, its unmodelled high frequencies leak into L_lm.
-// Here the unknowns are instead the values T_t of a coarse lat-long map on the texels
-// that reflected rays reach (several samples each: the map is coarser than the samples);
-// texels no ray reaches hold the SH reconstruction, and L_lm is the map's own projection,
-// so it is consistent by construction:
-//   L = sum_covered Omega_t Y(t) T_t + sum_uncovered Omega_t Y(t) Y(t)^T L
-//     => L = G P T,  G = (I - P_u Y_u^T)^-1,  P = [Omega_t Y(t)] over covered texels.
-// Sample k predicts o_k = F_k T_t(k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0) c_k, which is
-// linear in T. The normal matrix is diagonal (the mirror) plus rank 50 (the diffuse
-// coupling), solved exactly by the Woodbury identity in O(texels x 50^2).
-Eigen::VectorXd solve_map_consistent(const LightingData& data, float R0, float Rd, int channel, int width, int height,
-                                     double ridge) {
-  const int n = sh_count(data.lmax);
-  const size_t count = data.observed.size();
-  const double q = 1.0 - R0, diffuse_scale = kDiffuseNormalisation * Rd * q;
+MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge)
+    : n_(sh_count(data.lmax)), ridge_(ridge) {
   auto texel_of = [&](const Vec3& direction) {
     const Vec2 uv = direction_to_latlong(direction);
     return std::min(int(uv.y() * height), height - 1) * width + std::min(int(uv.x() * width), width - 1);
   };
-  // Covered texels and the per-texel sums.
   std::vector<int> index(size_t(width) * height, -1);
   std::vector<int> covered;
-  for (size_t k = 0; k < count; ++k) {
-    const int t = texel_of(data.reflected[k]);
+  for (const Vec3& r : data.reflected) {
+    const int t = texel_of(r);
     if (index[t] < 0) index[t] = int(covered.size()), covered.push_back(t);
   }
   const int m = int(covered.size());
-  // sum d d^T and sum o d are the gathered moments of c, scaled.
-  const Eigen::MatrixXd M = diffuse_scale * diffuse_scale * data.cc;
-  const Eigen::VectorXd b2 = diffuse_scale * data.co.col(channel);
-  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(m), b1 = Eigen::VectorXd::Zero(m);
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, n);
-  for (size_t k = 0; k < count; ++k) {
+  count_ = Eigen::VectorXd::Zero(m), g_ = count_, gg_ = count_;
+  o_ = Eigen::MatrixXd::Zero(m, 3), go_ = o_;
+  c_ = Eigen::MatrixXd::Zero(m, n_), gc_ = c_;
+  for (size_t k = 0; k < data.observed.size(); ++k) {
     const int i = index[texel_of(data.reflected[k])];
-    const double F = schlick_fresnel(double(R0), double(data.mu[k]));
-    diagonal[i] += F * F;
-    E.row(i) += (F * diffuse_scale) * Eigen::Map<const Eigen::VectorXf>(&data.c[k * n], n).cast<double>().transpose();
-    b1[i] += F * data.observed[k][channel];
+    const double g = coat_transmittance_g(double(data.mu[k]));
+    const Eigen::RowVector3d o = data.observed[k].cast<double>().matrix().transpose();
+    const Eigen::RowVectorXd c = Eigen::Map<const Eigen::RowVectorXf>(&data.c[k * n_], n_).cast<double>();
+    count_[i] += 1.0, g_[i] += g, gg_[i] += g * g;
+    o_.row(i) += o, go_.row(i) += g * o;
+    c_.row(i) += c, gc_.row(i) += g * c;
+    oo_ += o.array().square().matrix().transpose();
   }
-  // Projection weights of the texels (solid angle times the basis at the centre).
-  Eigen::MatrixXd P(n, m), uncovered = Eigen::MatrixXd::Zero(n, n);
-  std::vector<float> basis(n);
+  cc_ = data.cc, co_ = data.co;
+  // Projection weights of the texels (solid angle times the basis at the centre), and
+  // Q = G P with G = (I - P_u Y_u^T)^-1 for the uncovered texels.
+  Eigen::MatrixXd P(n_, m), uncovered = Eigen::MatrixXd::Zero(n_, n_);
+  std::vector<float> basis(n_);
   for (int t = 0; t < width * height; ++t) {
     const int j = t / width;
     const double solid_angle = 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
     sh_eval<float>(data.lmax, latlong_to_direction(Vec2((t % width + 0.5f) / width, (j + 0.5f) / height)), basis);
-    const Eigen::Map<const Eigen::VectorXf> y(basis.data(), n);
-    if (index[t] >= 0) P.col(index[t]) = solid_angle * y.cast<double>();
-    else uncovered += solid_angle * y.cast<double>() * y.cast<double>().transpose();
+    const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXf>(basis.data(), n_).cast<double>();
+    if (index[t] >= 0) P.col(index[t]) = solid_angle * y;
+    else uncovered += solid_angle * y * y.transpose();
   }
-  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-  const Eigen::MatrixXd Q = (I - uncovered + ridge * I).ldlt().solve(P);  // G P
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n_, n_);
+  Q_ = (I - uncovered + ridge * I).ldlt().solve(P);
+}
+
+MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, int channel) const {
+  // Per texel, with F_k = 1 - q g_k: sum F^2, sum F d_k and sum F o from the gathered sums.
+  const double q = 1.0 - R0, diffuse_scale = kDiffuseNormalisation * Rd * q;
+  const Eigen::VectorXd diagonal = count_ - 2.0 * q * g_ + q * q * gg_;
+  const Eigen::MatrixXd E = diffuse_scale * (c_ - q * gc_);
+  const Eigen::VectorXd b1 = o_.col(channel) - q * go_.col(channel);
+  // sum d d^T and sum o d are the gathered moments of c, scaled.
+  const Eigen::MatrixXd M = diffuse_scale * diffuse_scale * cc_;
+  const Eigen::VectorXd b2 = diffuse_scale * co_.col(channel);
   // N = D + U C U^T with U = [E, Q^T], C = [[0, I], [I, M]]; C^-1 = [[-M, I], [I, 0]].
-  const Eigen::VectorXd D = diagonal.array() + ridge * std::max(diagonal.mean(), 1e-30);
+  const int m = int(diagonal.size()), n = n_;
+  const Eigen::VectorXd D = diagonal.array() + ridge_ * std::max(diagonal.mean(), 1e-30);
   Eigen::MatrixXd U(m, 2 * n);
-  U << E, Q.transpose();
+  U << E, Q_.transpose();
   Eigen::MatrixXd C_inverse = Eigen::MatrixXd::Zero(2 * n, 2 * n);
   C_inverse.topLeftCorner(n, n) = -M;
-  C_inverse.topRightCorner(n, n) = I;
-  C_inverse.bottomLeftCorner(n, n) = I;
-  const Eigen::VectorXd rhs = b1 + Q.transpose() * b2;
+  C_inverse.topRightCorner(n, n).setIdentity();
+  C_inverse.bottomLeftCorner(n, n).setIdentity();
+  const Eigen::VectorXd rhs = b1 + Q_.transpose() * b2;
   const Eigen::MatrixXd D_inverse_U = U.array().colwise() / D.array();
   const Eigen::VectorXd D_inverse_rhs = rhs.array() / D.array();
   const Eigen::MatrixXd inner = C_inverse + U.transpose() * D_inverse_U;
-  const Eigen::VectorXd T = D_inverse_rhs - D_inverse_U * inner.fullPivLu().solve(U.transpose() * D_inverse_rhs);
-  return Q * T;
+  Solution solution;
+  solution.map = D_inverse_rhs - D_inverse_U * inner.fullPivLu().solve(U.transpose() * D_inverse_rhs);
+  solution.L = Q_ * solution.map;
+  // The least-squares minimum: sum o^2 - rhs . T (the normal equations hold at T).
+  solution.squared_error = std::max(0.0, oo_[channel] - rhs.dot(solution.map));
+  return solution;
 }
-
-}  // namespace
 
 LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options) {
   const int n = sh_count(data.lmax);
@@ -224,10 +222,12 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
     fit.multi_view_fraction = covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
     fit.map_consistent = fit.multi_view_fraction >= 0.5;
   }
+  std::optional<MapConsistentSystem> system;
+  if (fit.map_consistent) system.emplace(data, options.solve_width, options.solve_height, options.ridge);
   std::array<double, 3> condition{};
   tbb::parallel_for(0, 3, [&](int c) {  // the channels are independent
     L.col(c) = solve_sh_lighting(data, R0, Rd[c], c, options.ridge, &condition[c]);
-    if (fit.map_consistent) L.col(c) = solve_map_consistent(data, R0, Rd[c], c, options.solve_width, options.solve_height, options.ridge);
+    if (system) L.col(c) = system->solve(R0, Rd[c], c).L;
   });
   fit.condition = *std::max_element(condition.begin(), condition.end());
   for (int i = 0; i < n; ++i) fit.coefficients.values[i] = RGBd(L(i, 0), L(i, 1), L(i, 2));

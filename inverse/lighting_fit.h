@@ -71,6 +71,43 @@ struct LightingFit {
   bool map_consistent = false;  // which solve gave L_lm
 };
 
+// The lighting as a map, solved together with its SH coefficients (one channel).
+//
+// The SH-only least squares models the mirror term with lmax-4 lighting, but the mirror
+// sees the full-resolution environment, and in the dark channels of a coloured object,
+// where the mirror dominates, its unmodelled high frequencies leak into L_lm. Here the
+// unknowns are instead the values T_t of a coarse lat-long map on the texels that
+// reflected rays reach (several samples each: the map is coarser than the samples);
+// texels no ray reaches hold the SH reconstruction, and L_lm is the map's own projection,
+// so it is consistent by construction:
+//   L = sum_covered Omega_t Y(t) T_t + sum_uncovered Omega_t Y(t) Y(t)^T L
+//     => L = G P T,  G = (I - P_u Y_u^T)^-1,  P = [Omega_t Y(t)] over covered texels.
+// Sample k predicts o_k = F_k T_t(k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0) c_k, linear in
+// T. The normal matrix is diagonal (the mirror) plus rank 50 (the diffuse coupling),
+// solved exactly by the Woodbury identity. Everything material-independent is summed per
+// texel once, so a solve for another (R0, Rd) costs O(texels x 50^2), whatever the
+// number of samples: the joint fit solves it at every step.
+class MapConsistentSystem {
+ public:
+  MapConsistentSystem(const LightingData& data, int width, int height, double ridge);
+  struct Solution {
+    Eigen::VectorXd map;   // T on the covered texels
+    Eigen::VectorXd L;     // L_lm
+    double squared_error;  // the least-squares minimum, sum over samples
+  };
+  Solution solve(double R0, double Rd, int channel) const;
+
+ private:
+  int n_;
+  double ridge_;
+  Eigen::VectorXd count_, g_, gg_;   // per covered texel: samples, sum g, sum g^2
+  Eigen::MatrixXd o_, go_;           // per covered texel: sum o, sum g o (per channel)
+  Eigen::MatrixXd c_, gc_;           // per covered texel: sum c, sum g c
+  Eigen::MatrixXd cc_, co_;          // sum c c^T, sum c o
+  Eigen::Vector3d oo_ = Eigen::Vector3d::Zero();  // sum o^2
+  Eigen::MatrixXd Q_;                // G P
+};
+
 // Throws glaze::Error with fewer samples than unknowns.
 LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options);
 

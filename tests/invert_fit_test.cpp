@@ -292,6 +292,26 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
   EXPECT_LT(read_json(dir.file("matte/fit/fit.json"))["reference_L_lm_error_l2"].get<double>(), 0.03);
 }
 
+// --mode joint on the white sphere in the office (noise-free, 512x512): R0 and the
+// lighting's absolute scale come out right; Rd is within 0.02, short of the 0.003 the
+// issue asks for (the piecewise-constant solve map's model error; see the README).
+TEST(InvertFitJoint, WhiteSphereRecoversR0AndTheLightingScale) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "white_sphere_office.gltf", "joint", "--integrator sh --ss 1 --res 512x512 --holdout novel_0,novel_1");
+  const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
+  const nlohmann::json& truth = result["reference_material"];
+  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.02) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
+  }
+  std::printf("joint: R0 %+.4f, Rd %+.4f %+.4f %+.4f against the truth; lighting scale %.4f %.4f %.4f\n",
+              result["R0"].get<double>() - truth["R0"].get<double>(), result["Rd"][0].get<double>() - truth["Rd"][0].get<double>(),
+              result["Rd"][1].get<double>() - truth["Rd"][1].get<double>(), result["Rd"][2].get<double>() - truth["Rd"][2].get<double>(),
+              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
+              result["reference_scale"][2].get<double>());
+}
+
 TEST(InvertFitLighting, BadInputIsReported) {
   TemporaryDirectory dir;
   // One view: the mirror and the diffuse term cannot be told apart; said, not hidden.
