@@ -142,8 +142,12 @@ PolishedMaterial known_material(const Arguments& args, const CaptureSet& capture
     if (values.size() != 3) throw Error("option --Rd needs three comma-separated numbers r,g,b");
     Rd = RGB(values[0], values[1], values[2]);
   }
-  if (R0 < 0.0f || (Rd < 0.0f).any())
-    throw Error(captures.directory + "/transforms.json has no \"material\": --mode lighting needs the object's material; give --R0 x --Rd r,g,b");
+  if (R0 < 0.0f || (Rd < 0.0f).any()) {
+    const std::string missing = R0 < 0.0f ? (args.has("R0") ? "--R0 is negative" : "R0 is not given")
+                                          : (args.has("Rd") ? "--Rd is negative" : "Rd is not given");
+    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.directory +
+                "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
+  }
   return PolishedMaterial(R0, Rd);  // validates the ranges
 }
 
@@ -243,10 +247,14 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
               lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
               100 * fit.mirror_share);
   if (result.contains("reference_L_lm_error_l2"))
-    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00; map relative RMSE at 64x32 %.2f%% over %d covered cells\n",
-                100 * result["reference_L_lm_error_l2"].get<double>(),
-                100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
-                result["reference_map_error"]["64x32"]["cells"].get<int>());
+  {
+    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00", 100 * result["reference_L_lm_error_l2"].get<double>());
+    if (result.contains("reference_map_error") && result["reference_map_error"].contains("64x32"))
+      std::printf("; map relative RMSE at 64x32 %.2f%% over %d covered cells",
+                  100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
+                  result["reference_map_error"]["64x32"]["cells"].get<int>());
+    std::printf("\n");
+  }
   std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
   return 0;
 }
@@ -329,10 +337,18 @@ int command_invert_fit(const std::vector<std::string>& raw) {
     result["texture_resolution"] = {width, height};
     result["coverage"] = texture->coverage;
     if (captures.material.contains("texture")) {
+      // The set's own texture, when it is a file (relative paths against the set): what
+      // a known-truth experiment compares with. Not fatal when it cannot be read.
       RGB factor = RGB::Ones();
       if (captures.material.contains("Rd"))
         for (int c = 0; c < 3; ++c) factor[c] = captures.material["Rd"][c].get<float>();
-      result["texture_rmse"] = texture_rmse(*texture, read_image(captures.material["texture"].get<std::string>()), factor);
+      std::filesystem::path reference(captures.material["texture"].get<std::string>());
+      if (reference.is_relative()) reference = std::filesystem::path(captures.directory) / reference;
+      try {
+        result["texture_rmse"] = texture_rmse(*texture, read_image(reference.string()), factor);
+      } catch (const Error& error) {
+        warn(std::string("the capture set's texture cannot be compared: ") + error.what());
+      }
     }
   }
   stage_seconds["fit"] = seconds_since(stage);

@@ -9,6 +9,7 @@
 #include "inverse/samples.h"
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace glaze {
@@ -18,40 +19,51 @@ struct FootprintRay {
   Vec3 view;  // unit, towards the camera
 };
 
-// Calls pixel(centre, rays, weight) for every pixel that models sample k: `centre` the
-// hit through the pixel centre, `rays` the footprint rays that hit the object, `weight`
-// the pixel's share of the sample (1 for a pixel sample, bilinear for a point). Each
-// ray's own share is weight / rays.size().
+// Calls pixel(centre_normal, rays, weight) for every pixel that models sample k:
+// `centre_normal` the normal seen through the pixel centre (a pixel sample's own), `rays`
+// the footprint rays that hit the object, `weight` the pixel's share of the sample (1 for
+// a pixel sample, bilinear for a point). Each ray's own share is weight / rays.size().
 template <typename PixelVisit>
 void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& captures, const RayTracer& tracer,
                           int footprint, PixelVisit&& pixel) {
   const Sample& s = samples.samples[k];
   const PinholeCamera& camera = captures.frames[s.frame].camera;
   std::vector<FootprintRay> rays;
-  auto visit = [&](int px, int py, float weight) {
-    const std::optional<SurfaceHit> centre = tracer.intersect(camera.generate_ray(px + 0.5f, py + 0.5f));
-    if (!centre || weight == 0.0f) return;  // interior pixels always hit; kept safe
+  // centre: the hit through the pixel centre when the caller has it (a pixel sample).
+  auto visit = [&](int px, int py, float weight, std::optional<SurfaceHit> centre) {
+    if (weight == 0.0f) return;
+    const Ray centre_ray = camera.generate_ray(px + 0.5f, py + 0.5f);
+    if (!centre) centre = tracer.intersect(centre_ray, std::numeric_limits<float>::infinity(), false);
+    if (!centre) return;  // interior pixels always hit; kept safe
     rays.clear();
     if (footprint == 1) {  // the centre ray itself
-      rays.push_back({*centre, -camera.generate_ray(px + 0.5f, py + 0.5f).direction});
+      rays.push_back({*centre, -centre_ray.direction});
     } else {
       for (int j = 0; j < footprint; ++j)
         for (int i = 0; i < footprint; ++i) {
           const Ray ray = camera.generate_ray(px + (i + 0.5f) / footprint, py + (j + 0.5f) / footprint);
-          if (const std::optional<SurfaceHit> hit = tracer.intersect(ray)) rays.push_back({*hit, -ray.direction});
+          if (const std::optional<SurfaceHit> hit = tracer.intersect(ray, std::numeric_limits<float>::infinity(), false))
+            rays.push_back({*hit, -ray.direction});
         }
     }
-    if (!rays.empty()) pixel(*centre, rays, weight);
+    if (!rays.empty()) pixel(centre->normal, rays, weight);
   };
   if (samples.pixels) {
-    visit(int(std::floor(s.film.x())), int(std::floor(s.film.y())), 1.0f);
+    SurfaceHit own;
+    own.normal = s.normal;
+    own.position = s.position;
+    own.geometric_normal = s.normal;
+    own.uv = s.uv;
+    own.distance = 0.0f;
+    own.material = 0;
+    visit(int(std::floor(s.film.x())), int(std::floor(s.film.y())), 1.0f, own);
     return;
   }
   const float x = s.film.x() - 0.5f, y = s.film.y() - 0.5f;
   const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
   const float tx = x - x0, ty = y - y0;
   for (int dy = 0; dy <= 1; ++dy)
-    for (int dx = 0; dx <= 1; ++dx) visit(x0 + dx, y0 + dy, (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty));
+    for (int dx = 0; dx <= 1; ++dx) visit(x0 + dx, y0 + dy, (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty), std::nullopt);
 }
 
 }  // namespace glaze

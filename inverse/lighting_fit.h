@@ -93,7 +93,7 @@ class MapConsistentSystem {
   struct Solution {
     Eigen::VectorXd map;   // T on the covered texels
     Eigen::VectorXd L;     // L_lm
-    double squared_error;  // the least-squares minimum, sum over samples
+    double squared_error;  // the regularised least-squares minimum, sum over samples
   };
   Solution solve(double R0, double Rd, int channel) const;
 

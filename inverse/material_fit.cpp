@@ -22,8 +22,8 @@ std::vector<ShadingTerms> shading_terms(const SampleSet& samples, const CaptureS
     // The mirror term averaged over the footprint's rays; E, smooth across a pixel, at the
     // normal seen through its centre.
     for_each_model_pixel(samples, k, captures, tracer, footprint,
-                         [&](const SurfaceHit& centre, const std::vector<FootprintRay>& rays, float weight) {
-                           const RGB E = diffuse_sum(centre.normal);
+                         [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
+                           const RGB E = diffuse_sum(centre_normal);
                            const float share = weight / rays.size();
                            for (const FootprintRay& ray : rays) {
                              const RGB L = environment.eval(reflect(ray.view, ray.hit.normal));
@@ -303,6 +303,8 @@ MaterialFit fit_material(std::span<const Sample> samples, std::span<const Shadin
   if (terms.size() != samples.size() || (!group.empty() && group.size() != samples.size()) ||
       (!weights.empty() && weights.size() != samples.size()))
     throw Error("fit_material: per-sample arrays differ in length");
+  for (float w : weights)
+    if (!(w >= 0.0f && std::isfinite(w))) throw Error("fit_material: sample weights must be finite and non-negative");
   double light = 0.0;
   for (const Sample& s : samples) light += s.observed.abs().sum();
   if (!(light > 1e-12 * samples.size()))

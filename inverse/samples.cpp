@@ -120,8 +120,7 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
   for (size_t f = 0; f < captures.frames.size(); ++f) {
     const CaptureFrame& frame = captures.frames[f];
     const PinholeCamera& camera = frame.camera;
-    set.images.push_back(read_image(frame.file_path));
-    const Image& image = set.images.back();
+    const Image image = read_image(frame.file_path);
     if (image.width != camera.width || image.height != camera.height)
       throw Error(frame.file_path + ": the image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                   " but transforms.json gives its camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height));

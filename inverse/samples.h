@@ -50,7 +50,6 @@ struct SampleSet {
   std::vector<Sample> samples;      // frame by frame, in a fixed order
   std::vector<size_t> per_frame;    // samples kept per frame
   std::vector<DropCounts> dropped;  // per frame
-  std::vector<Image> images;        // the frames' images, as read
   DropCounts total_dropped() const;
 };
 

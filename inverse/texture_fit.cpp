@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace glaze {
@@ -14,14 +15,17 @@ int texel_of(const Vec2& uv, int width, int height) {
 
 RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width, int height,
                              const MaterialFit& homogeneous, const MaterialFitOptions& options) {
-  if (width < 1 || height < 1 || int64_t(width) * height > (1 << 24)) throw Error("the texture resolution must be 1x1 to 4096x4096");
+  // One Rd group per texel, each with 3x3 moments per channel: 1024x512 keeps that near 200 MB.
+  if (width < 1 || height < 1 || width > 1024 || height > 512)
+    throw Error("the texture resolution must be at most 1024x512, got " + std::to_string(width) + "x" + std::to_string(height));
   std::vector<int> group(samples.size());
   std::vector<float> weights(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) {
     group[k] = texel_of(samples[k].uv, width, height);
     const RGB total = predict(terms[k], homogeneous.R0, homogeneous.Rd[0]);
     const RGB specular = predict(terms[k], homogeneous.R0, RGB::Zero());
-    const float diffuse = luminance(total - specular), mirror = luminance(specular);
+    // Clamped: the unclamped SH sum can ring below zero, which must not make a weight negative.
+    const float diffuse = std::max(0.0f, luminance(total - specular)), mirror = std::max(0.0f, luminance(specular));
     weights[k] = samples[k].mu * (diffuse + mirror > 0.0f ? diffuse / (diffuse + mirror) : 0.0f);
   }
   RecoveredTexture texture;

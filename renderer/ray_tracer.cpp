@@ -119,7 +119,7 @@ RayTracer::~RayTracer() {
   if (device_) rtcReleaseDevice(device_);
 }
 
-std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distance) const {
+std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distance, bool texture_coordinates) const {
   float distance;
   unsigned geometry, primitive;
   Vec3 geometric_normal;  // unnormalised
@@ -164,7 +164,7 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
     const Vec3 n = geometric_normal.normalized();
     hit.position = sphere.center + sphere.radius * n;  // exactly on the surface
     hit.normal = hit.geometric_normal = n;
-    hit.uv = direction_to_latlong(sphere.rotation.transpose() * n);
+    hit.uv = texture_coordinates ? direction_to_latlong(sphere.rotation.transpose() * n) : Vec2::Zero();
     hit.material = sphere.material;
   } else {
     const TriangleMesh& mesh = scene_.meshes[geometry];
@@ -174,7 +174,8 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
     hit.geometric_normal = geometric_normal.normalized();
     const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
     hit.normal = shading.norm() > 0.0f ? shading.normalized() : hit.geometric_normal;
-    hit.uv = mesh.uvs.empty() ? Vec2::Zero() : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
+    hit.uv = mesh.uvs.empty() || !texture_coordinates ? Vec2::Zero()
+                                                      : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
     hit.material = mesh.material;
   }
   if (hit.geometric_normal.dot(ray.direction) > 0.0f) {  // two-sided: face the viewer

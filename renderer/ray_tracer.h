@@ -35,7 +35,10 @@ class RayTracer {
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;
 
-  std::optional<SurfaceHit> intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
+  // With `texture_coordinates` false the hit's uv is left (0, 0): a sphere's costs two
+  // arc tangents, which callers that only need the geometry skip.
+  std::optional<SurfaceHit> intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity(),
+                                      bool texture_coordinates = true) const;
   // True if anything lies along the ray closer than max_distance.
   bool occluded(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
 
