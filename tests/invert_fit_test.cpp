@@ -319,7 +319,8 @@ TEST(InvertFitLighting, BadInputIsReported) {
   const CommandResult single = glaze("invert-fit " + one + " --mode lighting --out " + dir.file("one_fit"), dir);
   ASSERT_EQ(single.exit_code, 0) << single.err;
   EXPECT_NE(single.err.find("two or more views"), std::string::npos) << single.err;
-  for (const auto& value : read_json(dir.file("one_fit/fit.json"))["L_lm"])
+  const nlohmann::json single_fit = read_json(dir.file("one_fit/fit.json"));
+  for (const auto& value : single_fit["L_lm"])
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(value[c].get<double>()));
   // Too few samples for 25 unknowns, and a set without a material.
   const std::string tiny = captures(dir, "white_sphere_office.gltf", "tiny", "--integrator sh --ss 1 --res 4x4");
