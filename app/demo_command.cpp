@@ -47,7 +47,7 @@ int command_demo(const std::vector<std::string>& raw) {
                 result["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
   std::printf("\n  held-out views re-rendered with the recovered material, relative RMSE:");
   for (const auto& view : result["holdout"]) std::printf(" %.4f", view["relative_rmse"].is_null() ? NAN : view["relative_rmse"].get<double>());
-  std::printf("\n  images: %s/render_*.exr and residual_*.exr beside %s/*.exr\n", fit.c_str(), captures.c_str());
+  std::printf("\n  images: the captures in %s, re-renders and residuals in %s\n", captures.c_str(), fit.c_str());
   return 0;
 }
 

@@ -129,6 +129,21 @@ void write_renders(const Arguments& args, const FitInputs& in, const Scene& scen
   }
 }
 
+// Defaults that match how glaze rendered the captures, when transforms.json says: the sh
+// integrator's K x K sub-pixel grid is exactly a footprint of K, and its lmax is the
+// band its diffuse term was truncated at. Otherwise a footprint of 4 (a camera's, or the
+// path tracer's, box-filtered pixel) and `otherwise_lmax`.
+std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_lmax) {
+  const nlohmann::json& r = captures.renderer;
+  auto integer = [&](const char* key, int low, int high, int fallback) {
+    if (!r.contains(key) || !r[key].is_number_integer()) return fallback;
+    const int value = r[key].get<int>();
+    return value >= low && value <= high ? value : fallback;
+  };
+  if (r.is_object() && r.value("integrator", "") == "sh") return {integer("ss", 1, 16, 4), integer("lmax", 0, kShMaxLmax, otherwise_lmax)};
+  return {4, otherwise_lmax};
+}
+
 // The known material of --mode lighting: --R0 and --Rd, else the capture set's.
 PolishedMaterial known_material(const Arguments& args, const CaptureSet& captures) {
   float R0 = -1.0f;
@@ -158,7 +173,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
   const int lmax = static_cast<int>(args.integer("lmax", 4, 0, 8));
-  const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", capture_defaults(in.captures, 4).first, 1, 16));
   LightingFitOptions options;
   std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
   options.ridge = args.real("ridge", float(options.ridge));
@@ -297,9 +312,10 @@ int command_invert_fit(const std::vector<std::string>& raw) {
 
   // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
   // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
-  const int lmax = static_cast<int>(args.integer("lmax", 16, 0, kShMaxLmax));
+  const auto [default_footprint, default_lmax] = capture_defaults(captures, 16);
+  const int lmax = static_cast<int>(args.integer("lmax", default_lmax, 0, kShMaxLmax));
   auto stage = Clock::now();
-  const int footprint = static_cast<int>(args.integer("pixel-footprint", 4, 1, 16));
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", default_footprint, 1, 16));
   const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
   stage_seconds["shading_terms"] = seconds_since(stage);
 

@@ -133,6 +133,8 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 
   for (bool held_out : {false, true}) {
     CaptureSet set{{}, object, environment_entry, material};
+    set.renderer = job.sh ? nlohmann::json{{"integrator", "sh"}, {"ss", job.sh->supersampling}, {"lmax", job.sh->lmax}}
+                          : nlohmann::json{{"integrator", "path"}, {"spp", job.options.spp}};
     const std::filesystem::path folder = held_out ? root / "holdout" : root;
     set.environment["file"] = procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
                                          : environment_file.string();

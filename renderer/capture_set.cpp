@@ -48,6 +48,7 @@ void write_transforms(const std::string& directory, const CaptureSet& captures) 
   root["object"] = captures.object;
   if (!captures.environment.is_null()) root["environment"] = captures.environment;
   if (!captures.material.is_null()) root["material"] = captures.material;
+  if (!captures.renderer.is_null()) root["renderer"] = captures.renderer;
 
   const std::filesystem::path target = std::filesystem::path(directory) / "transforms.json";
   const std::filesystem::path temporary = std::filesystem::path(directory) / ".transforms.json.tmp";
@@ -160,6 +161,7 @@ class TransformsReader {
     set.environment = environment();
     set.material = material();
     if (root_.contains("saturation")) set.saturation = number(root_.at("saturation"), file_, "saturation", kPositive);
+    if (root_.contains("renderer") && root_.at("renderer").is_object()) set.renderer = root_.at("renderer");
     return set;
   }
 

@@ -41,6 +41,9 @@ struct CaptureSet {
   // (glaze render --captures) stay free of -Wmissing-field-initializers.
   std::string directory = {};            // holding the transforms.json read; empty if built in memory
   std::optional<float> saturation = {};  // pixel values at or above it are saturated
+  // Optional: how glaze rendered the images, {"integrator": "sh", "ss": K, "lmax": L} or
+  // {"integrator": "path", "spp": N}; invert-fit models the pixels to match.
+  nlohmann::json renderer = {};
 };
 
 // Writes DIRECTORY/transforms.json (atomically). Intrinsics shared by every frame are
