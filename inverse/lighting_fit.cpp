@@ -1,6 +1,7 @@
 #include "inverse/lighting_fit.h"
 
 #include "inverse/footprint.h"
+#include "inverse/texture_fit.h"  // texel_of
 #include "renderer/error.h"
 #include "renderer/latlong.h"
 #include "renderer/shading.h"
@@ -95,7 +96,7 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   std::vector<uint8_t> seen(32 * 16, 0);
   for (const Sample& s : samples.samples) {
     const Vec2 uv = direction_to_latlong(s.normal);
-    seen[std::min(int(uv.y() * 16), 15) * 32 + std::min(int(uv.x() * 32), 31)] = 1;
+    seen[texel_of(uv, 32, 16)] = 1;
   }
   // Cells weighted by their solid angle (sin theta), so that the poles do not count double.
   double covered = 0.0, total_area = 0.0;
@@ -126,14 +127,14 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
 
 MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge)
     : n_(sh_count(data.lmax)), ridge_(ridge) {
-  auto texel_of = [&](const Vec3& direction) {
+  auto texel_of_direction = [&](const Vec3& direction) {
     const Vec2 uv = direction_to_latlong(direction);
-    return std::min(int(uv.y() * height), height - 1) * width + std::min(int(uv.x() * width), width - 1);
+    return texel_of(uv, width, height);
   };
   std::vector<int> index(size_t(width) * height, -1);
   std::vector<int> covered;
   for (const Vec3& r : data.reflected) {
-    const int t = texel_of(r);
+    const int t = texel_of_direction(r);
     if (index[t] < 0) index[t] = int(covered.size()), covered.push_back(t);
   }
   const int m = int(covered.size());
@@ -141,7 +142,7 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   o_ = Eigen::MatrixXd::Zero(m, 3), go_ = o_;
   c_ = Eigen::MatrixXd::Zero(m, n_), gc_ = c_;
   for (size_t k = 0; k < data.observed.size(); ++k) {
-    const int i = index[texel_of(data.reflected[k])];
+    const int i = index[texel_of_direction(data.reflected[k])];
     const double g = coat_transmittance_g(double(data.mu[k]));
     const Eigen::RowVector3d o = data.observed[k].cast<double>().matrix().transpose();
     const Eigen::RowVectorXd c = Eigen::Map<const Eigen::RowVectorXf>(&data.c[k * n_], n_).cast<double>();
@@ -219,8 +220,7 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
     std::vector<uint8_t> several(first_view.size(), 0);
     for (size_t k = 0; k < count; ++k) {
       const Vec2 uv = direction_to_latlong(data.reflected[k]);
-      const size_t t = size_t(std::min(int(uv.y() * options.solve_height), options.solve_height - 1)) * options.solve_width +
-                       std::min(int(uv.x() * options.solve_width), options.solve_width - 1);
+      const size_t t = texel_of(uv, options.solve_width, options.solve_height);
       if (first_view[t] < 0) first_view[t] = data.frame[k];
       else if (first_view[t] != data.frame[k]) several[t] = 1;
     }
@@ -253,7 +253,7 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
     all_light += data.observed[k].cast<double>().sum();
     if (!(F > 0.0)) continue;
     const Vec2 uv = direction_to_latlong(data.reflected[k]);
-    const size_t texel = size_t(std::min(int(uv.y() * height), height - 1)) * width + std::min(int(uv.x() * width), width - 1);
+    const size_t texel = texel_of(uv, width, height);
     sum[texel] += F * mirror;  // weight F^2 times the estimate mirror / F
     weight[texel] += F * F;
   }
