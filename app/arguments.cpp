@@ -35,11 +35,17 @@ bool parse_integer(const std::string& token, long* value) {
 
 }  // namespace
 
-Arguments::Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed) {
+Arguments::Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed,
+                     const std::set<std::string>& flags) {
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     if (arg.starts_with("--")) {
       const std::string key = arg.substr(2);
+      if (flags.count(key)) {
+        if (options_.count(key)) throw Error("option --" + key + " is given twice");
+        options_[key] = "";
+        continue;
+      }
       if (!allowed.count(key)) throw Error("unknown option --" + key + " (see `glaze help`)");
       if (i + 1 >= args.size()) throw Error("option --" + key + " needs a value");
       if (options_.count(key)) throw Error("option --" + key + " is given twice");

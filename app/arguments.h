@@ -14,7 +14,9 @@ namespace glaze {
 
 class Arguments {
  public:
-  Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed);
+  // `allowed` options take a value; `flags` take none (has() tells whether one is given).
+  Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed,
+            const std::set<std::string>& flags = {});
 
   const std::vector<std::string>& positionals() const { return positionals_; }
   bool has(const std::string& key) const { return options_.count(key) > 0; }

@@ -109,7 +109,12 @@ int command_convergence(const std::vector<std::string>& raw) {
   // The reference, and its own noise when glaze renders it.
   Image reference;
   double reference_noise = 0.0, reference_seconds = 0.0;
-  long reference_spp = 0;
+  const long reference_spp = args.has("ref") ? 0 : args.integer("ref-spp", 16384, 2, 1L << 24);
+  const long max_spp = args.integer("max-spp", reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024, 1, 1L << 20);
+  if (reference_spp > 0 && max_spp > reference_spp / 4)
+    throw Error("--max-spp " + std::to_string(max_spp) + " is too close to the reference's " + std::to_string(reference_spp) +
+                " spp: errors against it would mostly measure the reference's own noise; use at most --ref-spp / 4 (" +
+                std::to_string(reference_spp / 4) + ") or raise --ref-spp");
   if (args.has("ref")) {
     reference = read_image(args.text("ref", ""));
     if (reference.width != camera.width || reference.height != camera.height)
@@ -117,7 +122,6 @@ int command_convergence(const std::vector<std::string>& raw) {
                   std::to_string(reference.height) + " but camera " + camera.name + " renders " +
                   std::to_string(camera.width) + "x" + std::to_string(camera.height) + " (match it with --res)");
   } else {
-    reference_spp = args.integer("ref-spp", 16384, 2, 1L << 24);
     RenderOptions half = options;
     half.spp = static_cast<int>(reference_spp / 2);
     half.progress = isatty(STDERR_FILENO);
@@ -137,7 +141,6 @@ int command_convergence(const std::vector<std::string>& raw) {
   auto beyond_noise = [&](double error) { return std::sqrt(std::max(0.0, error * error - reference_noise * reference_noise)); };
 
   std::vector<Row> rows;
-  const long max_spp = args.integer("max-spp", reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024, 1, 1L << 20);
   for (long spp = 1; spp <= max_spp; spp *= 2) {
     options.spp = static_cast<int>(spp);
     const RenderResult result = render(tracer, camera, options);
@@ -207,6 +210,16 @@ int command_convergence(const std::vector<std::string>& raw) {
   std::printf("%s, camera %s, %dx%d, %zu interior pixels; reference %ld spp (relative noise %.3g%%)\n", scene.path.c_str(),
               camera.name.c_str(), camera.width, camera.height, rows.front().error.pixels, reference_spp, 100 * reference_noise);
   for (double target : kTargets) {
+    char key[16];
+    std::snprintf(key, sizeof key, "%g", target);
+    // A reference whose own noise is not well below the target cannot tell whether a
+    // method reaches it: say so instead of reporting a time.
+    if (reference_noise > 0.5 * target) {
+      summary["time_to"][key] = {{"resolvable", false}, {"reference_noise", reference_noise}};
+      std::printf("relative RMSE %.2g%%: not resolvable, the reference's own noise is %.3g%% (raise --ref-spp)\n",
+                  100 * target, 100 * reference_noise);
+      continue;
+    }
     const auto [path_seconds, extrapolated] = path_time_to(rows, target);
     const Row* sh = fastest_sh_within(rows, target);
     nlohmann::json entry = {{"path_seconds", path_seconds}, {"path_extrapolated", extrapolated}};
@@ -220,8 +233,6 @@ int command_convergence(const std::vector<std::string>& raw) {
       entry["sh_seconds"] = nullptr;
       std::printf(", sh: no setting reaches it\n");
     }
-    char key[16];
-    std::snprintf(key, sizeof key, "%g", target);
     summary["time_to"][key] = entry;
   }
   {

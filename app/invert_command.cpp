@@ -6,12 +6,17 @@
 //   --mode texture    R0 and a diffuse texture Rd(u, v), unknown texels alpha 0
 #include "app/arguments.h"
 #include "app/commands.h"
+#if GLAZE_HAVE_PREVIEW
+#include "app/fit_preview.h"
+#include "app/preview_window.h"
+#endif
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"
 #include "inverse/lighting_fit.h"
 #include "inverse/material_fit.h"
 #include "inverse/samples.h"
 #include "inverse/texture_fit.h"
+#include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
 #include "renderer/sh.h"
@@ -117,13 +122,13 @@ void write_fit(const std::filesystem::path& out, const nlohmann::json& result, c
   std::filesystem::rename(temporary, target);
 }
 
-// Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout).
+// Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout-dir).
 void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
                    int footprint, const std::filesystem::path& out, nlohmann::json& result) {
   result["renders"] = rerender(in.captures.frames, scene, *in.tracer, environment, lmax, footprint, out, "view");
-  const std::filesystem::path holdout = args.has("holdout") ? std::filesystem::path(args.text("holdout", ""))
-                                                            : std::filesystem::path(in.captures.directory) / "holdout";
-  if (args.has("holdout") || std::filesystem::exists(holdout / "transforms.json")) {
+  const std::filesystem::path holdout = args.has("holdout-dir") ? std::filesystem::path(args.text("holdout-dir", ""))
+                                                                : std::filesystem::path(in.captures.directory) / "holdout";
+  if (args.has("holdout-dir") || std::filesystem::exists(holdout / "transforms.json")) {
     const CaptureSet held_out = read_transforms(holdout.string());
     result["holdout"] = rerender(held_out.frames, scene, *in.tracer, environment, lmax, footprint, out, "holdout");
   }
@@ -166,9 +171,54 @@ PolishedMaterial known_material(const Arguments& args, const CaptureSet& capture
   return PolishedMaterial(R0, Rd);  // validates the ranges
 }
 
+#if GLAZE_HAVE_PREVIEW
+// --preview: every capture view, observed, for the window.
+void begin_preview(FitPreview* preview, const FitInputs& in, int lmax, int footprint) {
+  if (!preview) return;
+  std::vector<FitPreview::View> views;
+  for (const CaptureFrame& frame : in.captures.frames) views.push_back({frame.camera, read_image(frame.file_path)});
+  preview->begin(std::move(views), *in.tracer, lmax, footprint);
+}
+
+// The object with material (R0, Rd), under `environment`, labelled for the title.
+FitPreviewState preview_state(const Scene& object, float R0, const RGB& Rd,
+                              std::function<std::shared_ptr<const Environment>()> environment, const std::string& label) {
+  auto scene = std::make_shared<Scene>(object);
+  for (SceneMaterial& m : scene->materials) m.R0 = R0, m.Rd = Rd;
+  return {scene, std::move(environment), label};
+}
+
+std::string iterate_label(const FitIterate& it) {
+  char text[160];
+  std::snprintf(text, sizeof text, "iteration %d: R0 %.5f, Rd %.4f %.4f %.4f, cost %.4g", it.iteration, it.R0, it.Rd[0],
+                it.Rd[1], it.Rd[2], it.cost);
+  return text;
+}
+
+// Waits, when the scope ends, until the preview has drawn the last state: its render
+// thread reads the fit's geometry and lighting, which die with the scope.
+struct FinishPreview {
+  FitPreview* preview;
+  ~FinishPreview() {
+    if (preview) preview->finish();
+  }
+};
+#else
+struct FitPreview;
+void begin_preview(FitPreview*, const FitInputs&, int, int) {}
+struct FinishPreview {
+  FitPreview* preview;
+};
+#endif
+
+// A borrowed environment as the preview's lighting function.
+std::function<std::shared_ptr<const Environment>()> borrowed(const Environment& environment) {
+  return [&environment] { return std::shared_ptr<const Environment>(std::shared_ptr<const Environment>{}, &environment); };
+}
+
 // --mode lighting: the lighting from an object of known material; --mode joint: the
 // material and the lighting together.
-int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint) {
+int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
@@ -186,9 +236,21 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   auto stage = Clock::now();
   const LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
   stage_seconds["gather"] = seconds_since(stage);
+  begin_preview(preview, in, lmax, footprint);
+  const FinishPreview finish_preview{preview};
   stage = Clock::now();
   std::optional<JointFit> joint_fit;
-  if (joint) joint_fit = fit_joint(data, options, static_cast<int>(args.integer("max-iterations", 100, 1, 10000)));
+  FitObserver observer;
+#if GLAZE_HAVE_PREVIEW
+  // The lighting at each iterate is solved on the preview's thread, for the newest only.
+  if (preview)
+    observer = [&](const FitIterate& it) {
+      preview->show(preview_state(in.scene, it.R0, it.Rd, [&data, &options, it] {
+        return std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map, EnvironmentOptions{}, "lighting at the iterate");
+      }, iterate_label(it)));
+    };
+#endif
+  if (joint) joint_fit = fit_joint(data, options, static_cast<int>(args.integer("max-iterations", 100, 1, 10000)), observer);
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
   const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
@@ -250,6 +312,9 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   stage = Clock::now();
   const Environment recovered(fit.map, {}, "recovered lighting");
   for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
+#if GLAZE_HAVE_PREVIEW
+  if (preview) preview->show({std::make_shared<Scene>(in.scene), borrowed(recovered), "recovered lighting"});
+#endif
   write_renders(args, in, in.scene, recovered, lmax, footprint, out, result);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
@@ -274,23 +339,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   return 0;
 }
 
-}  // namespace
-
-int command_invert_fit(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
-                             "env-scale", "env-rotation", "holdout", "seed", "max-iterations", "pixel-footprint", "R0",
-                             "Rd", "env-res", "ridge", "solve-res"});
-  if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
-    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");
-  const std::string mode = args.text("mode", "");
-  if (mode != "material" && mode != "texture" && mode != "lighting" && mode != "joint")
-    throw Error("unknown mode '" + mode + "' (known: material, texture, lighting, joint)");
-  if (mode != "texture" && args.has("texture-res")) throw Error("--texture-res applies to --mode texture");
-  const bool lighting = mode == "lighting" || mode == "joint";
-  if (!lighting && (args.has("env-res") || args.has("ridge") || args.has("solve-res")))
-    throw Error("--env-res, --solve-res and --ridge apply to --mode lighting and joint");
-  if (mode != "lighting" && (args.has("R0") || args.has("Rd"))) throw Error("--R0 and --Rd give the known material of --mode lighting");
-  if (lighting) return invert_lighting(args, std::filesystem::path(args.text("out", "")), mode == "joint");
+// --mode material and texture: the material under known lighting.
+int invert_material(const Arguments& args, const std::filesystem::path& out, const std::string& mode, FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
 
@@ -318,13 +368,20 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   const int footprint = static_cast<int>(args.integer("pixel-footprint", default_footprint, 1, 16));
   const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
   stage_seconds["shading_terms"] = seconds_since(stage);
+  begin_preview(preview, in, lmax, footprint);
+  const FinishPreview finish_preview{preview};
 
   MaterialFitOptions fit_options;
   fit_options.loss = RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
   fit_options.max_iterations = static_cast<int>(args.integer("max-iterations", 100, 1, 10000));
+#if GLAZE_HAVE_PREVIEW
+  if (preview)
+    fit_options.observer = [&](const FitIterate& it) {
+      preview->show(preview_state(scene, it.R0, it.Rd, borrowed(environment), iterate_label(it)));
+    };
+#endif
   stage = Clock::now();
   MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
-  const std::filesystem::path out(args.text("out", ""));
   std::filesystem::create_directories(out);
   nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.text("loss", "none")},
                            {"pixel_footprint", footprint}};
@@ -344,6 +401,7 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   } else {
     const auto [width, height] = args.resolution("texture-res", {256, 128});
     result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
+    fit_options.observer = nullptr;  // its per-texel iterates are not one material to show
     texture = fit_texture(samples.samples, terms, width, height, fit, fit_options);
     fit = texture->fit;
     result["R0"] = fit.R0;
@@ -404,6 +462,9 @@ int command_invert_fit(const std::vector<std::string>& raw) {
       scene.textures = {Texture{"recovered texture", texture->Rd}};
     }
   }
+#if GLAZE_HAVE_PREVIEW
+  if (preview) preview->show({std::make_shared<Scene>(scene), borrowed(environment), "final: R0 " + std::to_string(fit.R0)});
+#endif
   write_renders(args, in, scene, environment, lmax, footprint, out, result);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
@@ -424,6 +485,67 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   }
   std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
   return 0;
+}
+
+}  // namespace
+
+int command_invert_fit(const std::vector<std::string>& raw) {
+  const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
+                             "env-scale", "env-rotation", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
+                             "Rd", "env-res", "ridge", "solve-res", "frames", "screenshot", "exposure", "tone-map"},
+                       {"preview"});
+  if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
+    throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");
+  const std::string mode = args.text("mode", "");
+  if (mode != "material" && mode != "texture" && mode != "lighting" && mode != "joint")
+    throw Error("unknown mode '" + mode + "' (known: material, texture, lighting, joint)");
+  if (mode != "texture" && args.has("texture-res")) throw Error("--texture-res applies to --mode texture");
+  const bool lighting = mode == "lighting" || mode == "joint";
+  if (!lighting && (args.has("env-res") || args.has("ridge") || args.has("solve-res")))
+    throw Error("--env-res, --solve-res and --ridge apply to --mode lighting and joint");
+  if (mode != "lighting" && (args.has("R0") || args.has("Rd"))) throw Error("--R0 and --Rd give the known material of --mode lighting");
+  if (lighting && (args.has("loss") || args.has("loss-scale")))
+    throw Error("--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least squares)");
+  // Every option's value is checked here, before the (long) sampling: a typo fails at once.
+  if (args.has("loss-scale") && !args.has("loss")) throw Error("--loss-scale goes with --loss huber|cauchy");
+  RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
+  args.integer("lmax", 0, 0, lighting ? 8 : kShMaxLmax);
+  args.integer("pixel-footprint", 1, 1, 16);
+  args.integer("max-iterations", 100, 1, 10000);
+  args.integer("points", 0, 0, 1 << 26);
+  args.real("min-cos", 0.2f);
+  args.resolution("texture-res", {256, 128});
+  args.resolution("env-res", {256, 128});
+  args.resolution("solve-res", {64, 32});
+  args.real("ridge", 0.0f);
+  if (args.has("preview")) {
+    args.integer("frames", 1, 1, 1 << 20);
+    parse_tone_mapping(args.text("tone-map", "filmic"));
+    args.real("exposure", 0.0f);
+  }
+  const std::filesystem::path out(args.text("out", ""));
+  auto invert = [&](FitPreview* preview) {
+    return lighting ? invert_lighting(args, out, mode == "joint", preview) : invert_material(args, out, mode, preview);
+  };
+  if (!args.has("preview")) {
+    if (args.has("frames") || args.has("screenshot") || args.has("exposure") || args.has("tone-map"))
+      throw Error("--frames, --screenshot, --exposure and --tone-map apply to --preview");
+    return invert(nullptr);
+  }
+#if GLAZE_HAVE_PREVIEW
+  require_display();
+  if (args.has("screenshot") && !args.has("frames")) throw Error("--screenshot needs --frames N (the frame to capture)");
+  DisplaySettings display;
+  display.exposure_ev = args.real("exposure", 0.0f);
+  display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
+  FitPreview preview(display);
+  int status = 1;
+  preview.run([&] { status = invert(&preview); }, static_cast<int>(args.integer("frames", 0, 1, 1 << 20)),
+              args.text("screenshot", ""));
+  return status;
+#else
+  throw Error(kNoPreview);
+#endif
 }
 
 }  // namespace glaze

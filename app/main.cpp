@@ -36,6 +36,9 @@ usage:
                                  recover the material (or R0 and a diffuse texture)
                                  under known lighting, the lighting from an object of
                                  known material, or both together (joint)
+  glaze preview SCENE [--camera NAME] [--integrator path|sh]
+                                 a window that shows the render as it refines;
+                                 orbit, pan, zoom, exposure, tone mapping (H: keys)
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -64,6 +67,22 @@ options of `render`:
     --lmax N          SH band limit of the diffuse term (default 4)
     --ss K            K x K sub-pixel samples (default 2)
 
+  --out FILE.png      a picture instead of radiance: --exposure EV (default 0)
+                      and --tone-map clamp|filmic|aces (default filmic), as the
+                      preview window shows it
+
+options of `preview` (also --res, --seed, --threads, --max-depth, --env..., --lmax, --ss):
+  --integrator I      shown first: sh (default for a single convex object) or path;
+                      the other follows in the background (key I switches)
+  --exposure EV, --tone-map clamp|filmic|aces   how it is shown (default 0, filmic)
+  --max-spp N         path passes stop here (default 4096)
+  --save-dir DIR      where key S saves NAME_CAMERA_N.exr and .png (default .)
+  --frames N          show N rendered steps (one path pass or the sh image each,
+                      in lockstep, so always the same picture) and exit;
+    --screenshot F.png  write what the window shows at the last one
+    --spin DEG        turn the camera DEG degrees about the object every frame
+  Without a display (DISPLAY unset) it fails at once; headless: xvfb-run.
+
 options of `invert-fit`:
   --env ENV, --env-scale S, --env-rotation DEG   the lighting (default: the set's)
   --lmax N            SH band limit of the diffuse term (default 16: exact to <0.1%)
@@ -74,12 +93,16 @@ options of `invert-fit`:
   --loss L            none (default), huber or cauchy, with --loss-scale S
                       (radiance; default 0.05)
   --texture-res WxH   texels of --mode texture (default 256x128)
-  --holdout DIR       held-out captures to re-render (default: CAPTURES/holdout)
+  --holdout-dir DIR   held-out captures to re-render (default: CAPTURES/holdout,
+                      where render --captures --holdout NAME,... puts them)
   --mode lighting:    --R0 x --Rd r,g,b (default: the set's material), --lmax N
                       (default 4), --env-res WxH (recovered map, default 256x128),
                       --solve-res WxH (map solved with L_lm, default 64x32),
                       --ridge R (relative Tikhonov weight, default 1e-6)
   --mode joint:       as lighting, without the material; --solve-res default 128x64
+  --preview           a window: each view observed, predicted and |residual| x8,
+                      updated as the solver iterates (--frames N --screenshot F.png,
+                      --exposure, --tone-map as for preview)
   Writes DIR/fit.json, solver.txt, render_view_NNN.exr and residual_view_NNN.exr
   (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
   lighting.exr and lighting_coverage.png for --mode lighting.
@@ -152,6 +175,13 @@ int run(const std::vector<std::string>& args) {
   if (command == "render") return command_render(rest);
   if (command == "convergence") return command_convergence(rest);
   if (command == "invert-fit") return command_invert_fit(rest);
+  if (command == "preview") {
+#if GLAZE_HAVE_PREVIEW
+    return command_preview(rest);
+#else
+    throw Error(kNoPreview);
+#endif
+  }
   throw Error("unknown command '" + command + "' (see `glaze help`)");
 }
 

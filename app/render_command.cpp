@@ -4,6 +4,7 @@
 #include "app/commands.h"
 #include "app/scene_options.h"
 #include "renderer/capture_set.h"
+#include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/path_tracer.h"
 #include "renderer/ray_tracer.h"
@@ -48,6 +49,12 @@ std::vector<std::string> split_names(const std::string& text) {
   return names;
 }
 
+// An 8-bit picture for people (display.h) rather than radiance.
+bool is_picture(const std::string& path) {
+  const std::string extension = std::filesystem::path(path).extension().string();
+  return extension == ".png" || extension == ".jpg" || extension == ".jpeg";
+}
+
 struct Job {
   const Scene& scene;
   const EnvironmentSpec& environment_spec;
@@ -57,6 +64,7 @@ struct Job {
   RenderOptions options;
   std::optional<ShIntegratorOptions> sh;  // set: the sh integrator, else the path tracer
   std::optional<std::pair<int, int>> resolution;
+  DisplaySettings display;  // of a picture (.png, .jpg) instead of radiance
 
   void render_to(const CameraSpec& spec, const std::string& path) const {
     const PinholeCamera camera = scene.make_camera(spec, resolution);
@@ -85,7 +93,13 @@ struct Job {
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     metadata["glaze:seconds"] = std::to_string(seconds);
-    write_image(path, image, metadata);
+    if (is_picture(path)) {
+      metadata["glaze:exposure"] = std::to_string(display.exposure_ev);
+      metadata["glaze:tone_mapping"] = tone_mapping_name(display.tone_mapping);
+      write_picture(path, image.width, image.height, display_image(image, display), metadata);
+    } else {
+      write_image(path, image, metadata);
+    }
     std::cerr << "wrote " << path << " (" << summary << ", " << seconds << " s)\n";
   }
 };
@@ -154,7 +168,8 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 
 int command_render(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"camera", "res", "spp", "time-budget", "seed", "threads", "integrator", "max-depth", "env",
-                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss"});
+                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss", "exposure",
+                             "tone-map"});
   if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
     throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
   const std::string integrator = args.text("integrator", "path");
@@ -163,6 +178,8 @@ int command_render(const std::vector<std::string>& raw) {
   if (integrator == "sh" && (args.has("spp") || args.has("time-budget") || args.has("estimator") || args.has("max-depth")))
     throw Error("--spp, --time-budget, --estimator and --max-depth apply to --integrator path");
   if (args.has("holdout") && !args.has("captures")) throw Error("--holdout applies to --captures");
+  if ((args.has("exposure") || args.has("tone-map")) && !is_picture(args.text("out", "")))
+    throw Error("--exposure and --tone-map apply to a picture: --out FILE.png (an EXR keeps the radiance)");
 
   const Scene scene = load_scene(args.positionals()[0]);
   const EnvironmentSpec spec = environment_spec(scene, args);
@@ -193,8 +210,11 @@ int command_render(const std::vector<std::string>& raw) {
     sh->black_background = args.has("captures");
     sh->threads = options.threads;
   }
+  DisplaySettings display;
+  display.exposure_ev = args.real("exposure", 0.0f);
+  display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
   const Job job{scene, spec, environment, ray_tracer, tracer, options, sh,
-                args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt};
+                args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt, display};
 
   if (args.has("captures")) {
     write_captures(job, args.text("captures", ""), split_names(args.text("holdout", "")), environment);

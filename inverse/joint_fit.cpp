@@ -23,7 +23,8 @@ struct JointMisfit {
 
 }  // namespace
 
-JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations) {
+JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations,
+                   const FitObserver& observer) {
   const size_t count = data.observed.size();
   if (count < size_t(sh_count(data.lmax)) + 4)
     throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
@@ -75,6 +76,14 @@ JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, 
   solver.parameter_tolerance = 1e-10;
   solver.num_threads = 1;
   solver.logging_type = ceres::SILENT;
+  FitObserverCallback report(observer, [&](FitIterate& iterate) {
+    iterate.R0 = float(material[0]);
+    iterate.Rd = RGB(float(material[1]), float(material[2]), float(material[3]));
+  });
+  if (observer) {
+    solver.update_state_every_iteration = true;
+    solver.callbacks.push_back(&report);
+  }
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
 

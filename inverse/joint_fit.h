@@ -13,6 +13,7 @@
 // exactly this reason: one texel, many samples.
 #pragma once
 
+#include "inverse/fit_progress.h"
 #include "inverse/lighting_fit.h"
 
 #include <string>
@@ -31,6 +32,7 @@ struct JointFit {
 
 // Throws glaze::Error when the views leave the problem unconstrained (too few samples,
 // or fewer than half of the reflected directions seen from two or more views).
-JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations);
+JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations,
+                   const FitObserver& observer = {});
 
 }  // namespace glaze

@@ -270,6 +270,15 @@ MaterialFit solve_outer(const Residual& residual, const MaterialFitOptions& opti
   solver.parameter_tolerance = 1e-12;
   solver.num_threads = 1;  // one residual block: nothing to spread; keeps results bit-identical
   solver.logging_type = ceres::SILENT;
+  FitObserverCallback report(options.observer, [&](FitIterate& iterate) {
+    iterate.R0 = float(R0);
+    const auto equations = residual.inner_solve(R0);
+    for (int c = 0; c < 3; ++c) iterate.Rd[c] = float(equations.front().solve(c));
+  });
+  if (options.observer) {
+    solver.update_state_every_iteration = true;
+    solver.callbacks.push_back(&report);
+  }
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
 

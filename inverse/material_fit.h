@@ -10,6 +10,7 @@
 // of the outer objective does not depend on how the inner minimiser moves.
 #pragma once
 
+#include "inverse/fit_progress.h"
 #include "inverse/samples.h"
 #include "renderer/environment.h"
 #include "renderer/shading.h"
@@ -46,6 +47,7 @@ struct RobustLoss {
 struct MaterialFitOptions {
   RobustLoss loss;
   int max_iterations = 100;
+  FitObserver observer;  // optional: told R0 and (group 0's) Rd after every iteration
 };
 
 struct MaterialFit {

@@ -1,6 +1,8 @@
 #include "renderer/error.h"
 
 #include <iostream>
+#include <mutex>
+#include <set>
 #include <utility>
 
 namespace glaze {
@@ -16,6 +18,16 @@ WarningSink& sink() {
 }  // namespace
 
 void warn(const std::string& message) { sink()(message); }
+
+void warn_once(const std::string& message) {
+  static std::mutex mutex;
+  static std::set<std::string> given;
+  {
+    std::lock_guard lock(mutex);
+    if (!given.insert(message).second) return;
+  }
+  warn(message);
+}
 
 WarningSink set_warning_sink(WarningSink new_sink) { return std::exchange(sink(), std::move(new_sink)); }
 

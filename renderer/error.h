@@ -22,6 +22,10 @@ using WarningSink = std::function<void(const std::string&)>;
 // Emits a warning (default: "glaze: warning: ..." on stderr).
 void warn(const std::string& message);
 
+// The same, the first time this exact message is given in this process only (for
+// warnings that every call of a routine would repeat).
+void warn_once(const std::string& message);
+
 // Replaces the warning sink; returns the previous one. Not thread-safe: set it up front.
 WarningSink set_warning_sink(WarningSink sink);
 

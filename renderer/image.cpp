@@ -81,6 +81,44 @@ Image read_image_from_memory(const unsigned char* bytes, size_t size, const std:
   return decode(*input, name);
 }
 
+namespace {
+
+// Writes `pixels` (interleaved, `spec`'s size and channels, of type `format`) to a
+// temporary file beside `path` and renames it over `path` only when it is complete.
+void write_atomically(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeDesc format, const void* pixels,
+                      const std::map<std::string, std::string>& metadata) {
+  const std::filesystem::path target(path);
+  // The writer is chosen by the target's name (the temporary file keeps its extension).
+  auto output = OIIO::ImageOutput::create(target.string());
+  if (!output)
+    throw Error(path + ": no image writer for the extension '" + target.extension().string() +
+                "' (use .exr for radiance, .png for a picture)");
+  std::filesystem::path temporary = target;
+  // Same directory (so rename is atomic), same extension (so the format is chosen right).
+  // (Built with append: GCC 12 gives a false -Wrestrict on a chain of operator+.)
+  std::string name = target.stem().string();
+  name.insert(0, 1, '.');
+  name.append(".tmp").append(std::to_string(std::random_device{}())).append(target.extension().string());
+  temporary.replace_filename(name);
+
+  for (const auto& [key, value] : metadata) spec.attribute(key, value);
+  const bool ok = output->open(temporary.string(), spec) && output->write_image(format, pixels) && output->close();
+  if (!ok) {
+    const std::string reason = output->geterror();
+    std::error_code ec;
+    std::filesystem::remove(temporary, ec);
+    throw Error(path + ": could not be written (" + reason + ")");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, target, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    throw Error(path + ": could not be written (rename failed: " + ec.message() + ")");
+  }
+}
+
+}  // namespace
+
 void write_image(const std::string& path, const Image& image,
                  const std::map<std::string, std::string>& metadata, std::span<const float> alpha) {
   if (image.width <= 0 || image.height <= 0) throw Error(path + ": refusing to write an empty image");
@@ -95,34 +133,18 @@ void write_image(const std::string& path, const Image& image,
       interleaved[4 * p + 3] = alpha[p];
     }
   }
-  const std::filesystem::path target(path);
-  std::filesystem::path temporary = target;
-  // Same directory (so rename is atomic), same extension (so the format is chosen right).
-  // (Built with append: GCC 12 gives a false -Wrestrict on a chain of operator+.)
-  std::string name = target.stem().string();
-  name.insert(0, 1, '.');
-  name.append(".tmp").append(std::to_string(std::random_device{}())).append(target.extension().string());
-  temporary.replace_filename(name);
-
-  auto output = OIIO::ImageOutput::create(temporary.string());
-  if (!output) throw Error(path + ": no image writer for this file type (" + OIIO::geterror() + ")");
   OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::FLOAT);
   if (channels == 4) spec.alpha_channel = 3;
-  for (const auto& [key, value] : metadata) spec.attribute(key, value);
-  const bool ok = output->open(temporary.string(), spec) &&
-                  output->write_image(OIIO::TypeDesc::FLOAT, alpha.empty() ? image.pixels.data() : interleaved.data()) && output->close();
-  if (!ok) {
-    const std::string reason = output->geterror();
-    std::error_code ec;
-    std::filesystem::remove(temporary, ec);
-    throw Error(path + ": could not be written (" + reason + ")");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, target, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    throw Error(path + ": could not be written (rename failed: " + ec.message() + ")");
-  }
+  write_atomically(path, spec, OIIO::TypeDesc::FLOAT, alpha.empty() ? image.pixels.data() : interleaved.data(), metadata);
+}
+
+void write_picture(const std::string& path, int width, int height, std::span<const uint8_t> srgb,
+                   const std::map<std::string, std::string>& metadata) {
+  if (width <= 0 || height <= 0) throw Error(path + ": refusing to write an empty image");
+  if (srgb.size() != size_t(width) * height * 3) throw Error(path + ": the pixels do not match the image size");
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  write_atomically(path, spec, OIIO::TypeDesc::UINT8, srgb.data(), metadata);
 }
 
 }  // namespace glaze

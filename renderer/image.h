@@ -8,6 +8,7 @@
 
 #include "renderer/math.h"
 
+#include <cstdint>
 #include <map>
 #include <span>
 #include <string>
@@ -51,5 +52,10 @@ float srgb_to_linear(float encoded);
 // `alpha`, if given (one value per pixel), is written as a fourth channel.
 void write_image(const std::string& path, const Image& image,
                  const std::map<std::string, std::string>& metadata = {}, std::span<const float> alpha = {});
+
+// Writes an 8-bit sRGB picture (row-major, 3 bytes a pixel; display.h makes them),
+// tagged sRGB, atomically. Throws glaze::Error on failure.
+void write_picture(const std::string& path, int width, int height, std::span<const uint8_t> srgb,
+                   const std::map<std::string, std::string>& metadata = {});
 
 }  // namespace glaze

@@ -4,10 +4,11 @@
 #include "renderer/low_discrepancy.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <mutex>
 
@@ -42,63 +43,116 @@ class ProgressBar {
 
 }  // namespace
 
-RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options) {
+ProgressiveRender::ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options)
+    : tracer_(tracer),
+      camera_(camera),
+      options_(options),
+      arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
   if (options.spp < 1) throw Error("samples per pixel must be at least 1");
-  const int width = camera.width, height = camera.height;
-  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
-  std::vector<double> sum(size_t(width) * height * 3, 0.0);
+  const size_t pixels = size_t(camera.width) * camera.height;
+  sum_.assign(pixels * 3, 0.0);
+  pass_.assign(pixels * 3, 0.0);
+  luminance_sum_.assign(pixels, 0.0);
+  luminance_sq_sum_.assign(pixels, 0.0);
+}
+
+int ProgressiveRender::tile_count() const {
+  return ((camera_.width + kTile - 1) / kTile) * ((camera_.height + kTile - 1) / kTile);
+}
+
+bool ProgressiveRender::add_pass(const std::atomic<bool>* cancel, const std::function<void()>& tile_done) {
+  const int width = camera_.width, height = camera_.height, spp = options_.spp, pass = passes_;
+  const int tiles_x = (width + kTile - 1) / kTile;
+  std::atomic<bool> cancelled{false};
+  arena_.execute([&] {
+    tbb::parallel_for(0, tile_count(), [&](int tile) {
+      if (cancel && cancel->load(std::memory_order_relaxed)) {
+        cancelled = true;
+        return;
+      }
+      const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+      std::vector<Ray> rays(spp);
+      std::vector<RGB> radiance(spp);
+      for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+        for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+          const uint64_t pixel = uint64_t(y) * width + x;
+          // Two streams per pixel (PCG sequences 2p and 2p + 1): the scramble, one for
+          // all passes so that passes continue one sequence, and the path samples.
+          Pcg32 scramble(options_.seed, 2 * pixel);
+          const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
+          Pcg32 rng(options_.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * pixel + 1);
+          for (int s = 0; s < spp; ++s) {
+            const Vec2 offset = options_.pixel_centres
+                                    ? Vec2(0.5f, 0.5f)
+                                    : scrambled_sobol_2d(uint32_t(pass * spp + s), scramble_x, scramble_y);
+            rays[s] = camera_.generate_ray(x + offset.x(), y + offset.y());
+          }
+          tracer_.radiance(rays.data(), spp, rng, radiance.data());
+          RGBd pixel_sum = RGBd::Zero();
+          for (int s = 0; s < spp; ++s) pixel_sum += radiance[s].cast<double>();
+          for (int c = 0; c < 3; ++c) pass_[pixel * 3 + c] = pixel_sum[c];
+        }
+      }
+      if (tile_done) tile_done();
+    });
+  });
+  if (cancelled) return false;
+  for (size_t pixel = 0; pixel < luminance_sum_.size(); ++pixel) {
+    const double* p = &pass_[pixel * 3];
+    for (int c = 0; c < 3; ++c) sum_[pixel * 3 + c] += p[c];
+    const double y = luminance(RGB(float(p[0] / spp), float(p[1] / spp), float(p[2] / spp)));
+    luminance_sum_[pixel] += y;
+    luminance_sq_sum_[pixel] += y * y;
+  }
+  ++passes_;
+  return true;
+}
+
+Image ProgressiveRender::mean(size_t* non_finite) const {
+  Image image(camera_.width, camera_.height);
+  size_t bad = 0;
+  if (passes_ > 0) {
+    for (size_t k = 0; k < sum_.size(); ++k) {
+      double value = sum_[k] / spp();
+      if (!std::isfinite(value)) {
+        value = 0.0;
+        ++bad;
+      }
+      image.pixels[k] = static_cast<float>(value);
+    }
+  }
+  if (non_finite) *non_finite = bad;
+  return image;
+}
+
+std::vector<float> ProgressiveRender::relative_standard_error() const {
+  std::vector<float> error(luminance_sum_.size(), std::numeric_limits<float>::quiet_NaN());
+  if (passes_ < 2) return error;
+  const double n = passes_;
+  for (size_t pixel = 0; pixel < error.size(); ++pixel) {
+    const double mean = luminance_sum_[pixel] / n;
+    if (!(mean > 0.0)) continue;
+    // Unbiased variance of one pass, then of the mean of n passes.
+    const double variance = std::max(0.0, (luminance_sq_sum_[pixel] - n * mean * mean) / (n - 1.0));
+    error[pixel] = static_cast<float>(std::sqrt(variance / n) / mean);
+  }
+  return error;
+}
+
+RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options) {
+  ProgressiveRender passes(tracer, camera, options);
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  int passes = 0;
   do {
-    const int pass = passes;
-    ProgressBar progress(options.progress && options.time_budget <= 0.0, tiles_x * tiles_y);
-    arena.execute([&] {
-      tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-        const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
-        std::vector<Ray> rays(options.spp);
-        std::vector<RGB> radiance(options.spp);
-        for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
-          for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-            const uint64_t pixel = uint64_t(y) * width + x;
-            // Two streams per pixel (PCG sequences 2p and 2p + 1): the scramble, one for
-            // all passes so that passes continue one sequence, and the path samples.
-            Pcg32 scramble(options.seed, 2 * pixel);
-            const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
-            Pcg32 rng(options.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * pixel + 1);
-            for (int s = 0; s < options.spp; ++s) {
-              const Vec2 offset = options.pixel_centres
-                                      ? Vec2(0.5f, 0.5f)
-                                      : scrambled_sobol_2d(uint32_t(pass * options.spp + s), scramble_x, scramble_y);
-              rays[s] = camera.generate_ray(x + offset.x(), y + offset.y());
-            }
-            tracer.radiance(rays.data(), options.spp, rng, radiance.data());
-            RGBd pixel_sum = RGBd::Zero();
-            for (int s = 0; s < options.spp; ++s) pixel_sum += radiance[s].cast<double>();
-            for (int c = 0; c < 3; ++c) sum[pixel * 3 + c] += pixel_sum[c];
-          }
-        }
-        progress.advance();
-      });
-    });
-    ++passes;
+    ProgressBar progress(options.progress && options.time_budget <= 0.0, passes.tile_count());
+    passes.add_pass(nullptr, [&] { progress.advance(); });
   } while (options.time_budget > 0.0 && elapsed() < options.time_budget);
 
   RenderResult result;
-  result.spp = passes * options.spp;
+  result.spp = passes.spp();
   result.seconds = elapsed();
-  result.image = Image(width, height);
   size_t non_finite = 0;
-  for (size_t k = 0; k < sum.size(); ++k) {
-    double value = sum[k] / result.spp;
-    if (!std::isfinite(value)) {
-      value = 0.0;
-      ++non_finite;
-    }
-    result.image.pixels[k] = static_cast<float>(value);
-  }
+  result.image = passes.mean(&non_finite);
   if (non_finite > 0) warn(std::to_string(non_finite) + " pixel values were not finite and were set to 0");
   return result;
 }

@@ -12,8 +12,12 @@
 #include "renderer/image.h"
 #include "renderer/path_tracer.h"
 
+#include <tbb/task_arena.h>
+
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace glaze {
 
@@ -35,5 +39,44 @@ struct RenderResult {
 };
 
 RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options);
+
+// The passes behind render(), one at a time, for callers that show the image as it
+// refines (the preview window): pass k of `options.spp` samples per pixel is the same
+// whether it is rendered here or by render(). Besides the running sum it keeps, per
+// pixel, the sum of squares of each pass's mean luminance, from which the Monte-Carlo
+// standard error of the running mean follows (passes are independent estimates).
+class ProgressiveRender {
+ public:
+  ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options);
+
+  // Renders the next pass and adds it. Returns false, adding nothing, when `cancel`
+  // becomes true before the pass is complete (it is checked between tiles).
+  // `tile_done` (optional) is called after each of the pass's tiles, from any thread.
+  bool add_pass(const std::atomic<bool>* cancel = nullptr, const std::function<void()>& tile_done = {});
+
+  int passes() const { return passes_; }
+  int spp() const { return passes_ * options_.spp; }
+  int tile_count() const;
+  // The mean of the passes so far (zero before the first); values that are not finite
+  // become 0, and their number is returned in `non_finite` if given.
+  Image mean(size_t* non_finite = nullptr) const;
+  // Per pixel (row-major): the standard error of the running mean's luminance relative
+  // to that mean, from the spread of the passes; NaN before two passes or where the mean
+  // is not positive. Exact in expectation for independent passes (pixel_centres); over
+  // the pixel area the passes continue one stratified sequence and the mean converges
+  // faster than that, so there it is an upper bound (its square about 1.3x too large in tests).
+  std::vector<float> relative_standard_error() const;
+
+ private:
+  const PathTracer& tracer_;
+  PinholeCamera camera_;
+  RenderOptions options_;
+  tbb::task_arena arena_;
+  int passes_ = 0;
+  std::vector<double> sum_;              // width * height * 3
+  std::vector<double> luminance_sum_;    // per pixel: sum over passes of the pass mean's luminance
+  std::vector<double> luminance_sq_sum_; // ... and of its square
+  std::vector<double> pass_;             // the pass being rendered: its per-pixel sums
+};
 
 }  // namespace glaze

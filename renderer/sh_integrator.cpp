@@ -13,7 +13,7 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
                 const PinholeCamera& camera, const ShIntegratorOptions& options) {
   if (options.supersampling < 1 || options.supersampling > 64) throw Error("supersampling must be in [1, 64]");
   if (!scene.is_single_convex_object()) {
-    warn(scene.path + ": the sh integrator assumes a single convex object under distant light; "
+    warn_once(scene.path + ": the sh integrator assumes a single convex object under distant light; "
          "it ignores the occlusion and interreflection of this scene (use --integrator path)");
   }
   const ShDiffuseSum diffuse_sum(environment.sh(options.lmax));  // projected once per environment and lmax

@@ -135,6 +135,10 @@ TEST(Cli, ConvergenceWritesTheStudy) {
   const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir.file("study/summary.json")));
   EXPECT_GT(summary["reference"]["relative_noise"].get<double>(), 0.0);
   EXPECT_TRUE(summary["time_to"].contains("0.01"));
+  // A target the reference's own noise cannot resolve has no time, and says why.
+  const double noise = summary["reference"]["relative_noise"].get<double>();
+  for (const char* target : {"0.01", "0.003"})
+    EXPECT_EQ(summary["time_to"][target].contains("resolvable"), noise > 0.5 * std::stod(target)) << target << ", noise " << noise;
   const Image plot = read_image(dir.file("study/convergence.png"));
   EXPECT_EQ(plot.width, 960);
   int ink = 0;
@@ -143,6 +147,7 @@ TEST(Cli, ConvergenceWritesTheStudy) {
 
   expect_clear_failure(glaze("convergence " + scene + " --res 16x16 --ref " + dir.file("study/reference.exr") + " --out " + dir.file("x"), dir), "--res");
   expect_clear_failure(glaze("convergence " + scene + " --ref a.exr --ref-spp 8 --out " + dir.file("x"), dir), "--ref");
+  expect_clear_failure(glaze("convergence " + scene + " --res 8x8 --ref-spp 64 --max-spp 32 --out " + dir.file("x"), dir), "--max-spp");
 }
 
 TEST(Cli, DemoRunsOnTheEmbeddedDefault) {

@@ -97,9 +97,10 @@ struct CommandResult {
 };
 
 // Runs `glaze ARGUMENTS` (the build's executable), capturing stdout and stderr.
-inline CommandResult run_glaze(const std::string& arguments, const TemporaryDirectory& dir) {
+// `prefix` runs glaze under another command (env, xvfb-run).
+inline CommandResult run_glaze(const std::string& arguments, const TemporaryDirectory& dir, const std::string& prefix = "") {
   const std::string err_file = dir.file("stderr.txt");
-  const std::string command = std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
+  const std::string command = prefix + std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
   FILE* pipe = popen(command.c_str(), "r");
   CommandResult run{};
   std::array<char, 4096> buffer;

@@ -1,0 +1,51 @@
+#include "app/orbit_camera.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace glaze {
+namespace {
+
+Vec3 forward_of(const PinholeCamera& camera) { return -camera.camera_to_world.linear().col(2); }
+
+}  // namespace
+
+OrbitCamera::OrbitCamera(const PinholeCamera& camera, const Vec3& scene_centre) : camera_(camera) {
+  const Vec3 forward = forward_of(camera);
+  const Vec3 to_centre = scene_centre - camera.position();
+  // A centre behind the camera (or at it) gives no pivot on the axis: use its distance.
+  const float along = to_centre.dot(forward);
+  distance_ = along > 1e-3f * std::max(1.0f, to_centre.norm()) ? along : std::max(to_centre.norm(), 1.0f);
+  pivot_ = camera.position() + distance_ * forward;
+}
+
+void OrbitCamera::place() {
+  camera_.camera_to_world.translation() = pivot_ - distance_ * forward_of(camera_);
+}
+
+void OrbitCamera::orbit(float yaw, float pitch) {
+  const Vec3 up(0.0f, 1.0f, 0.0f);
+  const Mat3 rotation = camera_.camera_to_world.linear();
+  // Pitch first, about the camera's own right axis; refused if it would carry the view
+  // axis within about 1 degree of the poles.
+  const Mat3 pitched = Eigen::AngleAxisf(-pitch, rotation.col(0)).toRotationMatrix() * rotation;
+  const Mat3 turned = Eigen::AngleAxisf(yaw, up).toRotationMatrix() *
+                      (std::abs((-pitched.col(2)).dot(up)) < 0.9998f ? pitched : rotation);
+  camera_.camera_to_world.linear() = turned;
+  place();
+}
+
+void OrbitCamera::pan(float dx, float dy) {
+  const Mat3 rotation = camera_.camera_to_world.linear();
+  // One pixel at depth d spans d / fl in world units.
+  pivot_ += rotation.col(0) * (-dx * distance_ / camera_.fl_x) + rotation.col(1) * (dy * distance_ / camera_.fl_y);
+  place();
+}
+
+void OrbitCamera::zoom(float factor) {
+  if (!(factor > 0.0f) || !std::isfinite(factor)) return;
+  distance_ = std::clamp(distance_ * factor, 1e-4f, 1e6f);
+  place();
+}
+
+}  // namespace glaze

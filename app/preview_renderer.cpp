@@ -1,0 +1,163 @@
+#include "app/preview_renderer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace glaze {
+namespace {
+
+// Path passes rendered before the sh image in path mode.
+constexpr int kPathFirstSpp = 8;
+
+std::vector<float> n_dot_v_image(const RayTracer& tracer, const PinholeCamera& camera) {
+  std::vector<float> values(size_t(camera.width) * camera.height, std::numeric_limits<float>::quiet_NaN());
+  tbb::parallel_for(0, camera.height, [&](int y) {
+    for (int x = 0; x < camera.width; ++x) {
+      const Ray ray = camera.generate_ray(x + 0.5f, y + 0.5f);
+      if (const auto hit = tracer.intersect(ray, std::numeric_limits<float>::infinity(), false))
+        values[size_t(y) * camera.width + x] = std::max(0.0f, hit->normal.dot(-ray.direction));
+    }
+  });
+  return values;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+PreviewRenderer::PreviewRenderer(const Scene& scene, const RayTracer& tracer, const Environment& environment,
+                                 const PathTracer& path, const PreviewRendererOptions& options, const PinholeCamera& camera,
+                                 PreviewIntegrator integrator)
+    : scene_(scene),
+      tracer_(tracer),
+      environment_(environment),
+      path_(path),
+      options_(options),
+      camera_(camera),
+      integrator_(integrator),
+      worker_([this] { run(); }) {}
+
+PreviewRenderer::~PreviewRenderer() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+    cancel_ = true;
+  }
+  changed_.notify_all();
+  worker_.join();
+}
+
+void PreviewRenderer::set_camera(const PinholeCamera& camera) {
+  {
+    std::lock_guard lock(mutex_);
+    camera_ = camera;
+    ++camera_serial_;
+    idle_ = false;
+    cancel_ = true;
+  }
+  changed_.notify_all();
+}
+
+void PreviewRenderer::set_integrator(PreviewIntegrator integrator) {
+  {
+    std::lock_guard lock(mutex_);
+    integrator_ = integrator;
+    idle_ = false;
+  }
+  changed_.notify_all();
+}
+
+std::shared_ptr<const PreviewFrame> PreviewRenderer::latest() const {
+  std::lock_guard lock(mutex_);
+  return latest_;
+}
+
+std::shared_ptr<const PreviewFrame> PreviewRenderer::wait_newer(uint64_t version) const {
+  std::unique_lock lock(mutex_);
+  // Only frames of the current camera: one still on its way from the previous camera is
+  // of no interest to a caller that waits (a test, or --frames with --spin).
+  changed_.wait(lock, [&] {
+    return (latest_ && latest_->version > version && latest_->camera_serial == camera_serial_) || idle_ || stop_;
+  });
+  if (latest_) consumed_ = std::max(consumed_, latest_->version);
+  changed_.notify_all();
+  return latest_;
+}
+
+void PreviewRenderer::publish(std::shared_ptr<PreviewFrame> frame) {
+  std::unique_lock lock(mutex_);
+  frame->version = (latest_ ? latest_->version : 0) + 1;
+  const uint64_t version = frame->version, serial = frame->camera_serial;
+  latest_ = std::move(frame);
+  changed_.notify_all();
+  if (options_.lockstep)
+    changed_.wait(lock, [&] { return consumed_ >= version || stop_ || camera_serial_ != serial; });
+}
+
+void PreviewRenderer::run() {
+  uint64_t serial = 0;
+  std::unique_ptr<ProgressiveRender> passes;
+  PreviewFrame state;
+  // The sh image is still to render: when sh is shown, or in the background for a
+  // scene where it is exact (a single convex object; elsewhere it only warns).
+  auto wants_sh = [&](PreviewIntegrator integrator) {
+    return state.sh_ss == 0 && (integrator == PreviewIntegrator::sh || scene_.is_single_convex_object());
+  };
+  RenderOptions path_options = options_.path;
+  path_options.spp = 1;
+  for (;;) {
+    PinholeCamera camera;
+    PreviewIntegrator integrator;
+    bool restart = false;
+    {
+      std::unique_lock lock(mutex_);
+      for (;;) {
+        if (stop_) return;
+        if (camera_serial_ != serial || wants_sh(integrator_) || passes->spp() < options_.max_spp) break;
+        idle_ = true;
+        changed_.notify_all();
+        changed_.wait(lock);
+      }
+      idle_ = false;
+      if (camera_serial_ != serial) {
+        serial = camera_serial_;
+        camera = camera_;
+        cancel_ = false;
+        restart = true;
+      }
+      integrator = integrator_;
+    }
+    if (restart) {
+      passes = std::make_unique<ProgressiveRender>(path_, camera, path_options);
+      state = PreviewFrame{};
+      state.camera_serial = serial;
+      state.camera = camera;
+      state.path = Image(camera.width, camera.height);
+      state.path_relative_error.assign(size_t(camera.width) * camera.height, std::numeric_limits<float>::quiet_NaN());
+      state.n_dot_v = n_dot_v_image(tracer_, camera);
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const bool sh_next = wants_sh(integrator) && (integrator == PreviewIntegrator::sh || passes->spp() >= kPathFirstSpp ||
+                                                  passes->spp() >= options_.max_spp);
+    if (sh_next) {
+      state.sh = render_sh(scene_, tracer_, environment_, state.camera, options_.sh);
+      state.sh_ss = options_.sh.supersampling;
+      state.sh_seconds = seconds_since(start);
+      if (cancel_) continue;  // a new camera arrived meanwhile: this image is stale
+    } else {
+      if (!passes->add_pass(&cancel_)) continue;
+      state.path_seconds += seconds_since(start);
+      state.path = passes->mean();
+      state.path_spp = passes->spp();
+      state.path_relative_error = passes->relative_standard_error();
+    }
+    publish(std::make_shared<PreviewFrame>(state));
+  }
+}
+
+}  // namespace glaze
