@@ -69,6 +69,7 @@ FitPreview::~FitPreview() {
 void FitPreview::show(FitPreviewState state) {
   {
     std::lock_guard lock(mutex_);
+    if (render_failure_) return;
     pending_ = std::move(state);
     has_pending_ = true;
     ++submitted_;
@@ -93,8 +94,20 @@ void FitPreview::render_loop() {
     options.lmax = lmax_;
     options.supersampling = footprint_;
     options.black_background = true;
-    const std::shared_ptr<const Environment> environment = state.environment();
-    for (const View& v : views_) predicted.push_back(render_sh(*state.scene, *tracer_, *environment, v.camera, options));
+    // A failure here (out of memory, a lighting solve that throws) stops the preview,
+    // never the fit: it is reported and the window shows no more states.
+    try {
+      const std::shared_ptr<const Environment> environment = state.environment();
+      for (const View& v : views_) predicted.push_back(render_sh(*state.scene, *tracer_, *environment, v.camera, options));
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "glaze: warning: the preview stops: %s\n", error.what());
+      std::lock_guard lock(mutex_);
+      render_failure_ = true;
+      rendered_ = submitted_ = serial;
+      has_pending_ = false;
+      changed_.notify_all();
+      return;
+    }
     {
       std::lock_guard lock(mutex_);
       predicted_ = std::move(predicted);
@@ -151,68 +164,84 @@ void FitPreview::run(const std::function<void()>& fit, int frames, const std::st
     {
       std::lock_guard lock(mutex_);
       fit_done_ = true;
+      fit_failed_ = bool(caught);
       failure = caught;
     }
     changed_.notify_all();
   });
-  // The window opens once the fit knows its views (or not at all if it fails first).
-  bool begun;
-  {
-    std::unique_lock lock(mutex_);
-    changed_.wait(lock, [&] { return begun_ || fit_done_; });
-    begun = begun_;
-  }
+  // Whatever happens here, the solver thread is joined before leaving (a joinable
+  // std::thread destroyed by an exception would end the process). The window opens, at
+  // the canvas's size, once the fit has told its views (the caller has checked that a
+  // display can be opened, so that it did not wait for this to fail).
   std::optional<PreviewWindow> window;
-  int width = 0, height = 0;
-  if (begun) {
-    try {
+  std::exception_ptr window_failure;
+  try {
+    bool begun;
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [&] { return begun_ || fit_done_; });
+      begun = begun_;
+    }
+    if (begun) {
+      int width, height;
       compose(width, height);
       window.emplace("glaze invert-fit: observed | predicted | residual x8", width, height);
-    } catch (...) {
-      solver.join();  // the fit runs to its end; the window's error is the one reported
-      throw;
+      show_until_closed(*window, frames, screenshot);
     }
+  } catch (...) {
+    window_failure = std::current_exception();
   }
+  bool done;
+  {
+    std::lock_guard lock(mutex_);
+    done = fit_done_;
+  }
+  const bool closed_early = window && !done;
+  window.reset();  // closed now, not frozen on the screen while the fit finishes
+  if (closed_early) std::fprintf(stderr, "glaze: the preview window is closed; the fit goes on to its end\n");
+  solver.join();
+  if (failure) std::rethrow_exception(failure);
+  if (window_failure) std::rethrow_exception(window_failure);
+}
+
+void FitPreview::show_until_closed(PreviewWindow& window, int frames, const std::string& screenshot) {
   uint64_t drawn = ~uint64_t(0);
-  int shown = 0;
+  int shown = 0, width = 0, height = 0;
   std::vector<uint8_t> canvas;
-  bool done = false, failed = false;
-  while (window && !window->should_close()) {
+  while (!window.should_close()) {
     std::string label;
     uint64_t rendered;
+    bool done, begun;
     {
       std::unique_lock lock(mutex_);
       // Headless: nothing is shown until the fit's final state is rendered.
-      if (frames > 0) changed_.wait(lock, [&] { return (fit_done_ && !has_pending_ && rendered_ == submitted_) || failure; });
+      if (frames > 0) changed_.wait(lock, [&] { return fit_done_ && !has_pending_ && rendered_ == submitted_; });
+      if (fit_done_ && (!begun_ || fit_failed_ || render_failure_)) return;  // nothing (more) to show
       done = fit_done_;
-      failed = bool(failure);
+      begun = begun_;
       rendered = rendered_;
       label = shown_label_;
     }
-    if (failed) break;
-    if (rendered != drawn) {
+    if (begun && rendered != drawn) {
       canvas = compose(width, height);
       drawn = rendered;
-      window->set_title("glaze invert-fit | " + (label.empty() ? std::string("starting") : label) + (done ? " | done" : "") +
+      window.set_title("glaze invert-fit | " + (label.empty() ? std::string("starting") : label) + (done ? " | done" : "") +
                        " | observed | predicted | residual x8");
     }
-    window->draw(width, height, canvas);
+    if (!canvas.empty()) window.draw(width, height, canvas);
     if (frames > 0 && ++shown >= frames) {
       if (!screenshot.empty()) {
         int w, h;
-        const std::vector<uint8_t> shot = window->read_back(w, h);
+        const std::vector<uint8_t> shot = window.read_back(w, h);
         write_picture(screenshot, w, h, shot, {{"glaze:frames", std::to_string(frames)}});
         std::printf("wrote %s (%dx%d)\n", screenshot.c_str(), w, h);
       }
-      window->present();
-      break;
+      window.present();
+      return;
     }
-    window->present();
-    window->wait_events(1.0 / 30.0);
+    window.present();
+    window.wait_events(1.0 / 30.0);
   }
-  if (window && !done && !failed) std::fprintf(stderr, "glaze: the window is closed; the fit goes on to its end\n");
-  solver.join();
-  if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace glaze

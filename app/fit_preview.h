@@ -62,6 +62,7 @@ class FitPreview {
  private:
   void render_loop();
   std::vector<uint8_t> compose(int& width, int& height);
+  void show_until_closed(PreviewWindow& window, int frames, const std::string& screenshot);
 
   DisplaySettings display_;
   std::vector<View> views_;            // set by begin(), then read-only
@@ -71,7 +72,8 @@ class FitPreview {
   std::mutex mutex_;
   std::condition_variable changed_;
   FitPreviewState pending_;            // guarded: newest state not yet rendered
-  bool begun_ = false, has_pending_ = false, stop_ = false, fit_done_ = false;
+  bool begun_ = false, has_pending_ = false, stop_ = false, fit_done_ = false, fit_failed_ = false,
+       render_failure_ = false;
   std::vector<Image> predicted_;       // guarded: the newest rendered state's views
   std::string shown_label_;            // guarded
   uint64_t rendered_ = 0, submitted_ = 0;  // guarded: states rendered / handed over

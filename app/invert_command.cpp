@@ -310,12 +310,13 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   }
 
   stage = Clock::now();
-  const Environment recovered(fit.map, {}, "recovered lighting");
+  // Shared with the preview's state, which may outlive this scope's locals.
+  const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
   for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
 #if GLAZE_HAVE_PREVIEW
-  if (preview) preview->show({std::make_shared<Scene>(in.scene), borrowed(recovered), "recovered lighting"});
+  if (preview) preview->show({std::make_shared<Scene>(in.scene), [recovered] { return recovered; }, "recovered lighting"});
 #endif
-  write_renders(args, in, in.scene, recovered, lmax, footprint, out, result);
+  write_renders(args, in, in.scene, *recovered, lmax, footprint, out, result);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
   result["seconds"] = seconds_since(start);
@@ -491,7 +492,7 @@ int invert_material(const Arguments& args, const std::filesystem::path& out, con
 
 int command_invert_fit(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
-                             "env-scale", "env-rotation", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
+                             "env-scale", "env-rotation", "holdout", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
                              "Rd", "env-res", "ridge", "solve-res", "frames", "screenshot", "exposure", "tone-map"},
                        {"preview"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
@@ -507,6 +508,11 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   if (lighting && (args.has("loss") || args.has("loss-scale")))
     throw Error("--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least squares)");
   // Every option's value is checked here, before the (long) sampling: a typo fails at once.
+  if (args.has("holdout"))
+    throw Error("--holdout names cameras of `glaze render --captures`; the held-out captures of invert-fit are "
+                "--holdout-dir DIR (default: CAPTURES/holdout)");
+  if (args.has("screenshot") && std::filesystem::path(args.text("screenshot", "")).extension() != ".png")
+    throw Error("--screenshot " + args.text("screenshot", "") + ": the screenshot is a PNG (name it FILE.png)");
   if (args.has("loss-scale") && !args.has("loss")) throw Error("--loss-scale goes with --loss huber|cauchy");
   RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
   args.integer("lmax", 0, 0, lighting ? 8 : kShMaxLmax);

@@ -26,12 +26,21 @@ void OrbitCamera::place() {
 void OrbitCamera::orbit(float yaw, float pitch) {
   const Vec3 up(0.0f, 1.0f, 0.0f);
   const Mat3 rotation = camera_.camera_to_world.linear();
-  // Pitch first, about the camera's own right axis; refused if it would carry the view
-  // axis within about 1 degree of the poles.
-  const Mat3 pitched = Eigen::AngleAxisf(-pitch, rotation.col(0)).toRotationMatrix() * rotation;
-  const Mat3 turned = Eigen::AngleAxisf(yaw, up).toRotationMatrix() *
-                      (std::abs((-pitched.col(2)).dot(up)) < 0.9998f ? pitched : rotation);
-  camera_.camera_to_world.linear() = turned;
+  // The view axis's elevation stays within 89 degrees of the horizon: the pitch is
+  // clamped, so that no step, however large, carries the view over a pole.
+  constexpr float kLimit = 89.0f * kPi / 180.0f;
+  const Vec3 forward = -rotation.col(2);
+  const float elevation = std::asin(std::clamp(forward.dot(up), -1.0f, 1.0f));
+  // (A scene camera already beyond the limit may only turn back towards the horizon.)
+  const float limit = std::max(kLimit, std::abs(elevation));
+  const float applied = elevation - std::clamp(elevation - pitch, -limit, limit);
+  // About the horizontal axis across the view (the camera's right axis unless it is
+  // rolled), which changes the elevation by exactly the angle; a camera looking straight
+  // up or down has none, and turns about its right axis.
+  const Vec3 across = forward.cross(up);
+  const Vec3 axis = across.norm() > 1e-6f ? Vec3(across.normalized()) : Vec3(rotation.col(0));
+  const Mat3 pitched = Eigen::AngleAxisf(-applied, axis).toRotationMatrix() * rotation;
+  camera_.camera_to_world.linear() = Eigen::AngleAxisf(yaw, up).toRotationMatrix() * pitched;
   place();
 }
 

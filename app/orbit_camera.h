@@ -3,8 +3,9 @@
 //
 // It starts as the scene camera exactly (roll included). The pivot is the point on the
 // view axis nearest to the scene's centre, so orbiting turns the object in place. Orbit
-// turns the pose about the world's up axis (+Y, DESIGN §3) and about the camera's right
-// axis through the pivot; pitch stops short of the poles so that "up" stays defined.
+// turns the pose about the world's up axis (+Y, DESIGN §3) and about the horizontal axis
+// across the view through the pivot; pitch stops 1 degree short of the poles so that "up" stays
+// defined.
 // Pan moves camera and pivot in the image plane, by image pixels at the pivot's depth
 // (the point under the cursor follows it); zoom moves the camera along its axis.
 #pragma once
@@ -17,7 +18,7 @@ class OrbitCamera {
  public:
   OrbitCamera(const PinholeCamera& camera, const Vec3& scene_centre);
 
-  // Yaw about world +Y and pitch about the camera's right axis, in radians: positive yaw
+  // Yaw about world +Y and pitch about the horizontal axis across the view, in radians: positive yaw
   // moves the camera to its right round the pivot, positive pitch moves it up.
   void orbit(float yaw, float pitch);
   // Shifts the view by (dx, dy) image pixels at the pivot's depth (x right, y down).

@@ -187,8 +187,12 @@ int command_preview(const std::vector<std::string>& raw) {
     if (!frame) return;
     std::error_code ec;
     std::filesystem::create_directories(save_dir, ec);
-    const std::string stem = (save_dir / (std::filesystem::path(scene.path).stem().string() + "_" +
-                                          scene.cameras[camera_index].name + "_" + std::to_string(saved++))).string();
+    // The first number not used yet: an earlier session's saves are never overwritten.
+    std::string stem;
+    do {
+      stem = (save_dir / (std::filesystem::path(scene.path).stem().string() + "_" + scene.cameras[camera_index].name + "_" +
+                          std::to_string(saved++))).string();
+    } while (std::filesystem::exists(stem + ".exr") || std::filesystem::exists(stem + ".png"));
     const bool sh = &shown_image(*frame, view.integrator) == &frame->sh;
     write_image(stem + ".exr", shown_image(*frame, view.integrator),
                 {{"glaze:integrator", sh ? "sh" : "path"}, {"glaze:spp", std::to_string(frame->path_spp)}, {"glaze:scene", scene.path}});
@@ -224,12 +228,8 @@ int command_preview(const std::vector<std::string>& raw) {
     }
     dirty = true;
   };
-  // Window pixels to picture pixels (the window may be smaller than the picture).
-  auto picture_scale = [&] {
-    int w, h;
-    window.size(w, h);
-    return std::max(double(orbit.camera().width) / std::max(w, 1), double(orbit.camera().height) / std::max(h, 1));
-  };
+  // Mouse motion (screen units) to picture pixels.
+  auto picture_scale = [&] { return window.picture_pixels_per_screen_unit(orbit.camera().width, orbit.camera().height); };
   window.on_drag = [&](double dx, double dy, int button, int mods) {
     const double scale = picture_scale();
     if (button == 2) {

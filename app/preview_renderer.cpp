@@ -74,6 +74,7 @@ void PreviewRenderer::set_integrator(PreviewIntegrator integrator) {
 
 std::shared_ptr<const PreviewFrame> PreviewRenderer::latest() const {
   std::lock_guard lock(mutex_);
+  if (failure_) std::rethrow_exception(failure_);
   return latest_;
 }
 
@@ -84,6 +85,7 @@ std::shared_ptr<const PreviewFrame> PreviewRenderer::wait_newer(uint64_t version
   changed_.wait(lock, [&] {
     return (latest_ && latest_->version > version && latest_->camera_serial == camera_serial_) || idle_ || stop_;
   });
+  if (failure_) std::rethrow_exception(failure_);
   if (latest_) consumed_ = std::max(consumed_, latest_->version);
   changed_.notify_all();
   return latest_;
@@ -100,9 +102,23 @@ void PreviewRenderer::publish(std::shared_ptr<PreviewFrame> frame) {
 }
 
 void PreviewRenderer::run() {
+  // What the worker throws (out of memory at a large --res, say) ends the rendering and
+  // is rethrown to the window's thread by latest() and wait_newer().
+  try {
+    render_steps();
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    failure_ = std::current_exception();
+    idle_ = true;
+    changed_.notify_all();
+  }
+}
+
+void PreviewRenderer::render_steps() {
   uint64_t serial = 0;
   std::unique_ptr<ProgressiveRender> passes;
   PreviewFrame state;
+  bool published_for_camera = false;
   // The sh image is still to render: when sh is shown, or in the background for a
   // scene where it is exact (a single convex object; elsewhere it only warns).
   auto wants_sh = [&](PreviewIntegrator integrator) {
@@ -140,23 +156,29 @@ void PreviewRenderer::run() {
       state.path = Image(camera.width, camera.height);
       state.path_relative_error.assign(size_t(camera.width) * camera.height, std::numeric_limits<float>::quiet_NaN());
       state.n_dot_v = n_dot_v_image(tracer_, camera);
+      published_for_camera = false;
     }
     const auto start = std::chrono::steady_clock::now();
     const bool sh_next = wants_sh(integrator) && (integrator == PreviewIntegrator::sh || passes->spp() >= kPathFirstSpp ||
                                                   passes->spp() >= options_.max_spp);
+    // A camera's first step is never abandoned, even when the camera has moved on by
+    // the time it is done: while the mouse drags, every step would otherwise be cut
+    // short and the window would show nothing new until the drag stops. It is published
+    // (tagged with its own camera) and the next step starts from the newest camera.
     if (sh_next) {
       state.sh = render_sh(scene_, tracer_, environment_, state.camera, options_.sh);
       state.sh_ss = options_.sh.supersampling;
       state.sh_seconds = seconds_since(start);
-      if (cancel_) continue;  // a new camera arrived meanwhile: this image is stale
+      if (cancel_ && published_for_camera) continue;  // stale, and something is shown already
     } else {
-      if (!passes->add_pass(&cancel_)) continue;
+      if (!passes->add_pass(published_for_camera ? &cancel_ : nullptr)) continue;
       state.path_seconds += seconds_since(start);
       state.path = passes->mean();
       state.path_spp = passes->spp();
       state.path_relative_error = passes->relative_standard_error();
     }
     publish(std::make_shared<PreviewFrame>(state));
+    published_for_camera = true;
   }
 }
 

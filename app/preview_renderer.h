@@ -11,7 +11,8 @@
 // a single convex object, where sh is exact), then the remaining passes. So switching is
 // instant, and in sh mode the path passes give a converging reference that the relative
 // error view compares against. A camera change cancels the running path pass between
-// tiles; a running sh frame (tens of milliseconds) is finished and discarded.
+// tiles; a running sh frame (tens of milliseconds) is finished. A camera's first step is
+// always finished and published, so that a drag shows images all along.
 // Also per camera: n.v at every pixel centre, for the n.v view.
 #pragma once
 
@@ -24,6 +25,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -71,6 +73,7 @@ class PreviewRenderer {
   void set_integrator(PreviewIntegrator integrator);
 
   // The newest published frame (null before the first). Never waits for rendering.
+  // Both rethrow what stopped the worker, if anything did.
   std::shared_ptr<const PreviewFrame> latest() const;
   // Waits until a frame newer than `version` is published and returns it; returns the
   // newest frame as it is when the renderer has nothing left to do (idle).
@@ -78,6 +81,7 @@ class PreviewRenderer {
 
  private:
   void run();
+  void render_steps();
   void publish(std::shared_ptr<PreviewFrame> frame);
 
   const Scene& scene_;
@@ -95,6 +99,7 @@ class PreviewRenderer {
   bool idle_ = false;                        // guarded by mutex_: nothing left to render
   std::shared_ptr<const PreviewFrame> latest_;  // guarded by mutex_
   mutable uint64_t consumed_ = 0;            // guarded by mutex_: newest version wait_newer() returned
+  std::exception_ptr failure_;               // guarded by mutex_: what stopped the worker
   std::atomic<bool> cancel_{false};          // set with a new camera: abandon the pass
   std::thread worker_;
 };

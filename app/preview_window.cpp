@@ -61,6 +61,18 @@ void main() {
 
 PreviewWindow& owner(GLFWwindow* window) { return *static_cast<PreviewWindow*>(glfwGetWindowUserPointer(window)); }
 
+// Shrinks width x height, keeping the aspect, to the primary monitor's work area.
+void fit_to_screen(int& width, int& height) {
+  if (GLFWmonitor* monitor = glfwGetPrimaryMonitor()) {
+    int x, y, w, h;
+    glfwGetMonitorWorkarea(monitor, &x, &y, &w, &h);
+    if (w > 0 && h > 0) {
+      const double shrink = std::min({1.0, double(w) / width, double(h) / height});
+      width = std::max(1, int(width * shrink)), height = std::max(1, int(height * shrink));
+    }
+  }
+}
+
 }  // namespace
 
 // Runs an input handler; what it throws is kept for wait_events() to rethrow.
@@ -78,19 +90,28 @@ namespace {
 
 }  // namespace
 
-void require_display() {
+namespace {
+
+// glfwInit, or a glaze::Error that names DISPLAY.
+void initialise_glfw() {
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
     throw Error("cannot open a window: DISPLAY is not set (no X display). Run it on a desktop, over ssh -X, or "
                 "headless under xvfb-run; to render without a window: glaze render");
+  if (!glfwInit())
+    throw Error("cannot open a window on DISPLAY=" + std::string(display) + ": " + last_glfw_error() +
+                " (is the X server running and reachable? headless: xvfb-run)");
+}
+
+}  // namespace
+
+void require_display() {
+  initialise_glfw();  // connects to the X server
+  glfwTerminate();
 }
 
 PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
-  require_display();
-  const char* display = std::getenv("DISPLAY");
-  if (!glfwInit())
-    throw Error("cannot open a window on DISPLAY=" + std::string(display ? display : "") + ": " + last_glfw_error() +
-                " (is the X server running and reachable? headless: xvfb-run)");
+  initialise_glfw();
   // From here on the constructor may still throw: release GLFW then.
   struct TerminateOnThrow {
     PreviewWindow& self;
@@ -106,14 +127,7 @@ PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_FALSE);
-  if (GLFWmonitor* monitor = glfwGetPrimaryMonitor()) {
-    int x, y, w, h;
-    glfwGetMonitorWorkarea(monitor, &x, &y, &w, &h);
-    if (w > 0 && h > 0) {
-      const double shrink = std::min({1.0, double(w) / width, double(h) / height});
-      width = std::max(1, int(width * shrink)), height = std::max(1, int(height * shrink));
-    }
-  }
+  fit_to_screen(width, height);
   window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
   if (!window_) {
     const std::string reason = last_glfw_error();
@@ -175,7 +189,16 @@ PreviewWindow::~PreviewWindow() {
 }
 
 bool PreviewWindow::should_close() const { return glfwWindowShouldClose(window_); }
-void PreviewWindow::size(int& width, int& height) const { glfwGetWindowSize(window_, &width, &height); }
+double PreviewWindow::picture_pixels_per_screen_unit(int width, int height) const {
+  int window_width, window_height, framebuffer_width, framebuffer_height;
+  glfwGetWindowSize(window_, &window_width, &window_height);
+  glfwGetFramebufferSize(window_, &framebuffer_width, &framebuffer_height);
+  // The shader's scale: framebuffer pixels per picture pixel, at most 1.
+  const double scale = std::min({1.0, double(framebuffer_width) / width, double(framebuffer_height) / height});
+  const double framebuffer_per_screen = double(framebuffer_width) / std::max(window_width, 1);
+  return framebuffer_per_screen / std::max(scale, 1e-6);
+}
+
 void PreviewWindow::close() { glfwSetWindowShouldClose(window_, GLFW_TRUE); }
 void PreviewWindow::set_title(const std::string& title) { glfwSetWindowTitle(window_, title.c_str()); }
 

@@ -18,8 +18,8 @@ struct GLFWwindow;
 
 namespace glaze {
 
-// Throws glaze::Error naming DISPLAY when no window can be opened here (checked before
-// long work starts, so that it fails at once).
+// Throws glaze::Error naming DISPLAY when no window can be opened here: DISPLAY unset,
+// or its X server not reachable (checked before long work starts, to fail at once).
 void require_display();
 
 class PreviewWindow {
@@ -32,10 +32,11 @@ class PreviewWindow {
   PreviewWindow& operator=(const PreviewWindow&) = delete;
 
   bool should_close() const;
-  // The window's size in screen coordinates (what mouse motion is measured in).
-  void size(int& width, int& height) const;
   void close();
   void set_title(const std::string& title);
+  // Picture pixels per screen unit of mouse motion, for a width x height picture drawn
+  // as draw() draws it (1:1 unless shrunk to fit; HiDPI framebuffers accounted for).
+  double picture_pixels_per_screen_unit(int width, int height) const;
 
   // Draws the picture (row-major RGB, row 0 at the top) into the back buffer.
   void draw(int width, int height, std::span<const uint8_t> rgb);

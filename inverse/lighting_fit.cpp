@@ -127,33 +127,39 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
 
 MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge)
     : n_(sh_count(data.lmax)), ridge_(ridge) {
-  auto texel_of_direction = [&](const Vec3& direction) {
+  // Texel and in-texel offset (in texels, each in [-1/2, 1/2)) of a reflected direction.
+  auto locate = [&](const Vec3& direction, Eigen::Vector3d& phi) {
     const Vec2 uv = direction_to_latlong(direction);
-    return texel_of(uv, width, height);
+    const int t = texel_of(uv, width, height);
+    phi = Eigen::Vector3d(1.0, uv.x() * width - (t % width + 0.5), uv.y() * height - (t / width + 0.5));
+    return t;
   };
   std::vector<int> index(size_t(width) * height, -1);
   std::vector<int> covered;
+  Eigen::Vector3d phi;
   for (const Vec3& r : data.reflected) {
-    const int t = texel_of_direction(r);
+    const int t = locate(r, phi);
     if (index[t] < 0) index[t] = int(covered.size()), covered.push_back(t);
   }
   const int m = int(covered.size());
-  count_ = Eigen::VectorXd::Zero(m), g_ = count_, gg_ = count_;
-  o_ = Eigen::MatrixXd::Zero(m, 3), go_ = o_;
-  c_ = Eigen::MatrixXd::Zero(m, n_), gc_ = c_;
+  for (auto* sums : {&phi_phi_, &g_phi_phi_, &gg_phi_phi_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
+  for (auto* sums : {&phi_o_, &g_phi_o_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
+  phi_c_ = Eigen::MatrixXd::Zero(3 * m, n_), g_phi_c_ = phi_c_;
   for (size_t k = 0; k < data.observed.size(); ++k) {
-    const int i = index[texel_of_direction(data.reflected[k])];
+    const int i = index[locate(data.reflected[k], phi)];
     const double g = coat_transmittance_g(double(data.mu[k]));
     const Eigen::RowVector3d o = data.observed[k].cast<double>().matrix().transpose();
     const Eigen::RowVectorXd c = Eigen::Map<const Eigen::RowVectorXf>(&data.c[k * n_], n_).cast<double>();
-    count_[i] += 1.0, g_[i] += g, gg_[i] += g * g;
-    o_.row(i) += o, go_.row(i) += g * o;
-    c_.row(i) += c, gc_.row(i) += g * c;
+    const Eigen::Matrix3d pp = phi * phi.transpose();
+    phi_phi_[i] += pp, g_phi_phi_[i] += g * pp, gg_phi_phi_[i] += g * g * pp;
+    phi_o_[i] += phi * o, g_phi_o_[i] += g * phi * o;
+    phi_c_.middleRows<3>(3 * i) += phi * c, g_phi_c_.middleRows<3>(3 * i) += g * phi * c;
     oo_ += o.array().square().matrix().transpose();
   }
   cc_ = data.cc, co_ = data.co;
-  // Projection weights of the texels (solid angle times the basis at the centre), and
-  // Q = G P with G = (I - P_u Y_u^T)^-1 for the uncovered texels.
+  // Projection weights of the texels (solid angle times the basis at the centre; the
+  // gradient integrates to zero over a texel), and Q = G P with G = (I - P_u Y_u^T)^-1
+  // for the uncovered texels.
   Eigen::MatrixXd P(n_, m), uncovered = Eigen::MatrixXd::Zero(n_, n_);
   std::vector<float> basis(n_);
   for (int t = 0; t < width * height; ++t) {
@@ -168,36 +174,113 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   Q_ = (I - uncovered + ridge * I).ldlt().solve(P);
 }
 
+std::vector<Eigen::Matrix3d> MapConsistentSystem::blocks(double q) const {
+  const size_t m = phi_phi_.size();
+  std::vector<Eigen::Matrix3d> B(m);
+  double trace = 0.0;
+  for (size_t t = 0; t < m; ++t) {
+    B[t] = phi_phi_[t] - 2.0 * q * g_phi_phi_[t] + q * q * gg_phi_phi_[t];
+    trace += B[t](0, 0);
+  }
+  // A texel's gradient is undetermined by fewer than three samples off a line: the ridge
+  // keeps every block invertible and such a gradient at 0.
+  const double ridge = ridge_ * std::max(trace / double(std::max<size_t>(m, 1)), 1e-30);
+  for (Eigen::Matrix3d& block : B) block += ridge * Eigen::Matrix3d::Identity();
+  return B;
+}
+
+MapConsistentSystem::Profile MapConsistentSystem::profile(double R0) const {
+  const double q = 1.0 - R0;
+  const int m = int(phi_phi_.size()), n = n_;
+  const std::vector<Eigen::Matrix3d> B = blocks(q);
+  const Eigen::MatrixXd E = phi_c_ - q * g_phi_c_;  // E' (3m x n): E = s E'
+  Eigen::MatrixXd B_inverse_E(3 * m, n), b1(3 * m, 3), B_inverse_b1(3 * m, 3);
+  Eigen::VectorXd value_weight(m);                  // (B_t^-1)_00
+  Eigen::MatrixXd value_rows_E(m, n), value_rows_b1(m, 3);  // the value rows of B^-1 E', B^-1 b1
+  for (int t = 0; t < m; ++t) {
+    const Eigen::Matrix3d inverse = B[t].inverse();
+    B_inverse_E.middleRows<3>(3 * t) = inverse * E.middleRows<3>(3 * t);
+    b1.middleRows<3>(3 * t) = phi_o_[t] - q * g_phi_o_[t];
+    B_inverse_b1.middleRows<3>(3 * t) = inverse * b1.middleRows<3>(3 * t);
+    value_weight[t] = inverse(0, 0);
+    value_rows_E.row(t) = B_inverse_E.row(3 * t);
+    value_rows_b1.row(t) = B_inverse_b1.row(3 * t);
+  }
+  Profile p;
+  p.diffuse_per_Rd = kDiffuseNormalisation * q;
+  p.EE = E.transpose() * B_inverse_E;
+  p.EQ = value_rows_E.transpose() * Q_.transpose();
+  p.QQ = Q_ * value_weight.asDiagonal() * Q_.transpose();
+  p.cc = cc_;
+  p.vE = B_inverse_E.transpose() * b1;
+  p.vQ = Q_ * value_rows_b1;
+  p.co = co_;
+  for (int c = 0; c < 3; ++c) p.bb[c] = b1.col(c).dot(B_inverse_b1.col(c));
+  p.oo = oo_;
+  return p;
+}
+
+double MapConsistentSystem::Profile::squared_error(double Rd, int channel) const {
+  // With s = 21/(20 pi) (1 - R0) Rd, U = [s E', Qx^T], rhs = b1 + s Qx^T co:
+  //   rhs.x = rhs^T B^-1 rhs - w^T K^-1 w,  w = U^T B^-1 rhs,  K = C^-1 + U^T B^-1 U,
+  // every term a product of the R0-only matrices above with powers of s.
+  const double s = diffuse_per_Rd * Rd;
+  const int n = int(cc.rows());
+  const Eigen::VectorXd co_c = co.col(channel);
+  Eigen::VectorXd w(2 * n);
+  w.head(n) = s * (vE.col(channel) + s * EQ * co_c);
+  w.tail(n) = vQ.col(channel) + s * QQ * co_c;
+  Eigen::MatrixXd K(2 * n, 2 * n);
+  K.topLeftCorner(n, n) = s * s * (EE - cc);
+  K.topRightCorner(n, n) = s * EQ + Eigen::MatrixXd::Identity(n, n);
+  K.bottomLeftCorner(n, n) = K.topRightCorner(n, n).transpose();
+  K.bottomRightCorner(n, n) = QQ;
+  const double rhs_B_rhs = bb[channel] + 2.0 * s * vQ.col(channel).dot(co_c) + s * s * co_c.dot(QQ * co_c);
+  return std::max(0.0, oo[channel] - (rhs_B_rhs - w.dot(K.partialPivLu().solve(w))));
+}
+
 MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, int channel) const {
-  // Per texel, with F_k = 1 - q g_k: sum F^2, sum F d_k and sum F o from the gathered sums.
+  // Unknowns: per covered texel its value and its gradient (x = [T, Gu, Gv] per texel);
+  // L = Q T. With F_k = 1 - q g_k, the per-texel blocks come from the gathered sums.
   const double q = 1.0 - R0, diffuse_scale = kDiffuseNormalisation * Rd * q;
-  const Eigen::VectorXd diagonal = count_ - 2.0 * q * g_ + q * q * gg_;
-  const Eigen::MatrixXd E = diffuse_scale * (c_ - q * gc_);
-  const Eigen::VectorXd b1 = o_.col(channel) - q * go_.col(channel);
+  const int m = int(phi_phi_.size()), n = n_;
   // sum d d^T and sum o d are the gathered moments of c, scaled.
   const Eigen::MatrixXd M = diffuse_scale * diffuse_scale * cc_;
   const Eigen::VectorXd b2 = diffuse_scale * co_.col(channel);
-  // N = D + U C U^T with U = [E, Q^T], C = [[0, I], [I, M]]; C^-1 = [[-M, I], [I, 0]].
-  const int m = int(diagonal.size()), n = n_;
-  const Eigen::VectorXd D = diagonal.array() + ridge_ * std::max(diagonal.mean(), 1e-30);
-  Eigen::MatrixXd U(m, 2 * n);
-  U << E, Q_.transpose();
-  Eigen::MatrixXd C_inverse = Eigen::MatrixXd::Zero(2 * n, 2 * n);
-  C_inverse.topLeftCorner(n, n) = -M;
-  C_inverse.topRightCorner(n, n).setIdentity();
-  C_inverse.bottomLeftCorner(n, n).setIdentity();
-  const Eigen::VectorXd rhs = b1 + Q_.transpose() * b2;
-  const Eigen::MatrixXd D_inverse_U = U.array().colwise() / D.array();
-  const Eigen::VectorXd D_inverse_rhs = rhs.array() / D.array();
-  const Eigen::MatrixXd inner = C_inverse + U.transpose() * D_inverse_U;
+  // N = B + U C U^T with B block diagonal (sum F^2 phi phi^T per texel), U = [E, Qx^T]
+  // (E: sum F phi d^T per texel; Qx: Q on the value unknowns, 0 on the gradients),
+  // C = [[0, I], [I, M]], C^-1 = [[-M, I], [I, 0]]: solved by the Woodbury identity.
+  const std::vector<Eigen::Matrix3d> B = blocks(q);
+  Eigen::MatrixXd U(3 * m, 2 * n);
+  U.leftCols(n) = diffuse_scale * (phi_c_ - q * g_phi_c_);
+  U.rightCols(n).setZero();
+  Eigen::VectorXd rhs(3 * m);
+  for (int t = 0; t < m; ++t) {
+    U.block(3 * t, n, 1, n) = Q_.col(t).transpose();
+    rhs.segment<3>(3 * t) = phi_o_[t].col(channel) - q * g_phi_o_[t].col(channel);
+    rhs[3 * t] += Q_.col(t).dot(b2);
+  }
+  Eigen::MatrixXd B_inverse_U(3 * m, 2 * n);
+  Eigen::VectorXd B_inverse_rhs(3 * m);
+  for (int t = 0; t < m; ++t) {
+    const Eigen::LDLT<Eigen::Matrix3d> block(B[t]);
+    B_inverse_U.middleRows<3>(3 * t) = block.solve(U.middleRows<3>(3 * t));
+    B_inverse_rhs.segment<3>(3 * t) = block.solve(rhs.segment<3>(3 * t));
+  }
+  Eigen::MatrixXd inner = U.transpose() * B_inverse_U;
+  inner.topLeftCorner(n, n) -= M;
+  inner.topRightCorner(n, n) += Eigen::MatrixXd::Identity(n, n);
+  inner.bottomLeftCorner(n, n) += Eigen::MatrixXd::Identity(n, n);
+  const Eigen::VectorXd x = B_inverse_rhs - B_inverse_U * inner.fullPivLu().solve(U.transpose() * B_inverse_rhs);
   Solution solution;
-  solution.map = D_inverse_rhs - D_inverse_U * inner.fullPivLu().solve(U.transpose() * D_inverse_rhs);
+  solution.map.resize(m);
+  for (int t = 0; t < m; ++t) solution.map[t] = x[3 * t];
   solution.L = Q_ * solution.map;
-  // The minimum of the regularised least squares, sum (o - prediction)^2 + ridge |T|^2,
-  // which at the solution of its normal equations is sum o^2 - rhs.T. (The ridge term is
+  // The minimum of the regularised least squares, sum (o - prediction)^2 + ridge |x|^2,
+  // which at the solution of its normal equations is sum o^2 - rhs.x. (The ridge term is
   // part of the objective the joint fit minimises on purpose: dropping it measurably
-  // worsens the joint estimates, e.g. Rd +0.03 instead of +0.017 on the white sphere.)
-  solution.squared_error = std::max(0.0, oo_[channel] - rhs.dot(solution.map));
+  // worsens the joint estimates.)
+  solution.squared_error = std::max(0.0, oo_[channel] - rhs.dot(x));
   return solution;
 }
 

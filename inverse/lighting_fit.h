@@ -76,33 +76,61 @@ struct LightingFit {
 // The SH-only least squares models the mirror term with lmax-4 lighting, but the mirror
 // sees the full-resolution environment, and in the dark channels of a coloured object,
 // where the mirror dominates, its unmodelled high frequencies leak into L_lm. Here the
-// unknowns are instead the values T_t of a coarse lat-long map on the texels that
-// reflected rays reach (several samples each: the map is coarser than the samples);
-// texels no ray reaches hold the SH reconstruction, and L_lm is the map's own projection,
-// so it is consistent by construction:
+// unknowns are instead, on the texels of a coarse lat-long map that reflected rays reach
+// (several samples each: the map is coarser than the samples), the lighting's value T_t
+// at the texel's centre and its gradient G_t across the texel, so that sample k sees
+// T_t + G_t . delta_k, delta_k its offset from the centre in texels. The gradient
+// matters to the joint fit: without it the lighting's variation within a texel, seen by
+// each view at other offsets and other n.v, reads as a change of Fresnel factor and
+// biases R0, Rd and the scale (measured on the white sphere in the office: Rd off by
+// 0.017-0.032 and the scale by 4%, against 0.005 and 0.6% with it; adding second-order
+// terms made it worse again: six unknowns per texel leave too little to pin F). Texels no ray reaches hold the SH reconstruction, and L_lm
+// is the map's own projection (of the T_t), so it is consistent by construction:
 //   L = sum_covered Omega_t Y(t) T_t + sum_uncovered Omega_t Y(t) Y(t)^T L
 //     => L = G P T,  G = (I - P_u Y_u^T)^-1,  P = [Omega_t Y(t)] over covered texels.
-// Sample k predicts o_k = F_k T_t(k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0) c_k, linear in
-// T. The normal matrix is diagonal (the mirror) plus rank 50 (the diffuse coupling),
-// solved exactly by the Woodbury identity. Everything material-independent is summed per
-// texel once, so a solve for another (R0, Rd) costs O(texels x 50^2), whatever the
-// number of samples: the joint fit solves it at every step.
+// Sample k predicts o_k = F_k (T_t + G_t . delta_k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0)
+// c_k, linear in the unknowns. The normal matrix is block diagonal (3 x 3 per texel: the
+// mirror) plus rank 50 (the diffuse coupling), solved exactly by the Woodbury identity.
+// Everything material-independent is summed per texel once, so a solve for another
+// (R0, Rd) costs O(texels x 50^2), whatever the number of samples: the joint fit solves
+// it at every step.
 class MapConsistentSystem {
  public:
   MapConsistentSystem(const LightingData& data, int width, int height, double ridge);
   struct Solution {
-    Eigen::VectorXd map;   // T on the covered texels
+    Eigen::VectorXd map;   // T on the covered texels (the value at each texel's centre)
     Eigen::VectorXd L;     // L_lm
     double squared_error;  // the regularised least-squares minimum, sum over samples
   };
   Solution solve(double R0, double Rd, int channel) const;
 
+  // The minimum squared error alone, for one R0 and any Rd of each channel: what depends
+  // on R0 is formed once here (O(texels x 50^2)); each Rd then costs O(50^3), whatever
+  // the number of texels. (The joint fit evaluates thousands of materials.)
+  class Profile {
+   public:
+    // Equals solve(R0, Rd, channel).squared_error.
+    double squared_error(double Rd, int channel) const;
+
+   private:
+    friend class MapConsistentSystem;
+    double diffuse_per_Rd = 0.0;      // 21/(20 pi) (1 - R0): s = diffuse_per_Rd Rd
+    Eigen::MatrixXd EE, EQ, QQ, cc;   // E'^T B^-1 E', E'^T B^-1 Qx^T, Qx B^-1 Qx^T, sum c c^T
+    Eigen::MatrixXd vE, vQ, co;       // per channel (columns): E'^T B^-1 b1, Qx B^-1 b1, sum c o
+    Eigen::Vector3d bb, oo;           // b1^T B^-1 b1, sum o^2
+  };
+  Profile profile(double R0) const;
+
  private:
+  // B (per texel 3 x 3, with the ridge) and E' = sum F phi c^T at this R0.
+  std::vector<Eigen::Matrix3d> blocks(double q) const;
   int n_;
   double ridge_;
-  Eigen::VectorXd count_, g_, gg_;   // per covered texel: samples, sum g, sum g^2
-  Eigen::MatrixXd o_, go_;           // per covered texel: sum o, sum g o (per channel)
-  Eigen::MatrixXd c_, gc_;           // per covered texel: sum c, sum g c
+  // Per covered texel, phi = (1, delta): sums of phi phi^T, g phi phi^T, g^2 phi phi^T;
+  // of phi o^T and g phi o^T (columns: channels); and, three rows per texel, of phi c^T
+  // and g phi c^T.
+  std::vector<Eigen::Matrix3d> phi_phi_, g_phi_phi_, gg_phi_phi_, phi_o_, g_phi_o_;
+  Eigen::MatrixXd phi_c_, g_phi_c_;
   Eigen::MatrixXd cc_, co_;          // sum c c^T, sum c o
   Eigen::Vector3d oo_ = Eigen::Vector3d::Zero();  // sum o^2
   Eigen::MatrixXd Q_;                // G P

@@ -20,6 +20,9 @@ float hable(float x) {
 
 // The tone curve of an exposed value x > 0.
 float tone_curve(float x, ToneMapping mapping) {
+  // Beyond 1e6 every curve is at 1 to float precision; the clamp keeps their rational
+  // forms from overflowing into inf / inf.
+  x = std::min(x, 1e6f);
   float y = 0.0f;
   switch (mapping) {
     case ToneMapping::clamp:
@@ -27,11 +30,11 @@ float tone_curve(float x, ToneMapping mapping) {
       break;
     case ToneMapping::filmic: {
       static const float white = hable(11.2f);
-      y = std::isinf(x) ? 1.0f : hable(2.0f * x) / white;
+      y = hable(2.0f * x) / white;
       break;
     }
     case ToneMapping::aces: {
-      const float v = std::isinf(x) ? 1e10f : 0.6f * x;
+      const float v = 0.6f * x;
       y = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
       break;
     }
@@ -78,8 +81,9 @@ float tone_map(float linear, const DisplaySettings& settings) {
 }
 
 uint8_t srgb_encode_8bit(float value) {
+  if (std::isnan(value)) return 0;
   const std::array<float, 255>& t = srgb_thresholds();
-  return static_cast<uint8_t>(std::upper_bound(t.begin(), t.end(), value) - t.begin());  // NaN gives 0
+  return static_cast<uint8_t>(std::upper_bound(t.begin(), t.end(), value) - t.begin());
 }
 
 std::vector<uint8_t> display_image(const Image& image, const DisplaySettings& settings) {

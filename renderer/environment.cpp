@@ -59,8 +59,7 @@ Vec3 Environment::uv_to_direction(const Vec2& uv) const {
 EnvironmentLookup Environment::locate(const Vec3& w) const {
   const Vec3 d = local_to_world_.transpose() * w;
   EnvironmentLookup at;
-  at.uv = direction_to_latlong(d);
-  at.sin_theta = latlong_sin_theta(d);
+  at.uv = direction_to_latlong(d, &at.sin_theta);
   const float x = at.uv.x() * map_.width - 0.5f, y = at.uv.y() * map_.height - 0.5f;
   const float x_floor = std::floor(x), y_floor = std::floor(y);
   at.fx = x - x_floor;

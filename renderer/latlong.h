@@ -14,18 +14,16 @@ inline Vec3 latlong_to_direction(const Vec2& uv, float* sin_theta_out = nullptr)
   return {sin_theta * std::sin(phi), std::cos(theta), -sin_theta * std::cos(phi)};
 }
 
-// sin(theta) of direction d (need not be normalised), accurate near the poles too.
-inline float latlong_sin_theta(const Vec3& d) {
-  return std::sqrt(d.x() * d.x() + d.z() * d.z()) / d.norm();
-}
-
 // d need not be normalised. theta comes from atan2, which keeps full relative precision
 // near the poles where acos(d.y) loses it (that matters to sampling densities there).
-inline Vec2 direction_to_latlong(const Vec3& d) {
+// Also gives sin(theta) if asked, accurate near the poles too.
+inline Vec2 direction_to_latlong(const Vec3& d, float* sin_theta_out = nullptr) {
   float u = fast_atan2(d.x(), -d.z()) * (0.5f / kPi);
   if (u < 0.0f) u += 1.0f;
   if (u >= 1.0f) u = 0.0f;  // u = -0 rounds onto 1
-  const float v = fast_atan2(std::sqrt(d.x() * d.x() + d.z() * d.z()), d.y()) / kPi;
+  const float rho = std::sqrt(d.x() * d.x() + d.z() * d.z());
+  if (sin_theta_out) *sin_theta_out = rho / d.norm();
+  const float v = fast_atan2(rho, d.y()) / kPi;
   return {u, std::min(v, 1.0f)};
 }
 

@@ -1,5 +1,7 @@
 #include "renderer/sh.h"
 
+#include <array>
+
 #include "renderer/error.h"
 #include "renderer/material.h"
 #include "renderer/quadrature.h"
@@ -233,6 +235,26 @@ ShCoefficients sh_project_latlong(const Image& map, const Mat3& local_to_world, 
   return sh_rotate(in_p_frame, local_to_world.cast<double>() * p_to_local);
 }
 
+namespace {
+
+// The basis functions of bands 0..4 up to a constant factor each: Re and Im of
+// (x + i y)^|m| times the Legendre polynomial in z, the very polynomials for_each_sh's
+// recurrence builds, written out (no table, no loop).
+template <typename T>
+std::array<T, 25> low_band_polynomials(T x, T y, T z) {
+  const T z2 = z * z, xy = x * y, re2 = x * x - y * y;
+  const T re3 = x * re2 - y * (2 * xy), im3 = y * re2 + x * (2 * xy);  // (x + i y)^3
+  const T re4 = x * re3 - y * im3, im4 = y * re3 + x * im3;          // (x + i y)^4
+  return {T(1),
+          y, z, x,
+          xy, y * z, 3 * z2 - 1, x * z, re2,
+          im3, xy * z, y * (5 * z2 - 1), z * (5 * z2 - 3), x * (5 * z2 - 1), z * re2, re3,
+          im4, z * im3, xy * (7 * z2 - 1), y * z * (7 * z2 - 3), (35 * z2 - 30) * z2 + 3, x * z * (7 * z2 - 3),
+          re2 * (7 * z2 - 1), z * re3, re4};
+}
+
+}  // namespace
+
 ShDiffuseSum::ShDiffuseSum(const ShCoefficients& lighting)
     : lmax_(lighting.lmax), weighted_(size_t(sh_count(lighting.lmax)) * 3) {
   for (int l = 0; l <= lmax_; ++l) {
@@ -241,6 +263,31 @@ ShDiffuseSum::ShDiffuseSum(const ShCoefficients& lighting)
       for (int c = 0; c < 3; ++c)
         weighted_[size_t(c) * sh_count(lmax_) + sh_index(l, m)] = static_cast<float>(factor * lighting(l, m)[c]);
   }
+  if (lmax_ <= 4) {
+    // Each polynomial's constant, from the basis at one direction where none vanishes
+    // (in double), folded into the weights.
+    const Vec3d d = Vec3d(std::sqrt(0.1), std::sqrt(0.4), std::sqrt(0.5));
+    std::array<double, 25> basis{};
+    for_each_sh(4, d.x(), d.y(), d.z(), [&](int i, double v) { basis[i] = v; });
+    const std::array<double, 25> shape = low_band_polynomials(d.x(), d.y(), d.z());
+    for (int l = 0; l <= lmax_; ++l) {
+      const double factor = sh_lambda(l) * sh_kernel_coefficient(l);
+      for (int m = -l; m <= l; ++m) {
+        const int i = sh_index(l, m);
+        for (int c = 0; c < 3; ++c) low_band_[c][i] = static_cast<float>(factor * lighting(l, m)[c] * basis[i] / shape[i]);
+      }
+    }
+  }
+}
+
+RGB ShDiffuseSum::sum_low_bands(const Vec3& n) const {
+  const std::array<float, 25> p = low_band_polynomials(n.x(), n.y(), n.z());
+  // Run-time-sized maps: Eigen vectorises those with unaligned AVX loads, whereas its
+  // fixed sizes are held to the 16-byte alignment glaze builds with (CMakeLists.txt).
+  const Eigen::Map<const Eigen::VectorXf> shape(p.data(), 25);
+  return RGB(shape.dot(Eigen::Map<const Eigen::VectorXf>(low_band_[0].data(), 25)),
+             shape.dot(Eigen::Map<const Eigen::VectorXf>(low_band_[1].data(), 25)),
+             shape.dot(Eigen::Map<const Eigen::VectorXf>(low_band_[2].data(), 25)));
 }
 
 template <typename Lmax>
@@ -261,9 +308,8 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
 
 RGB ShDiffuseSum::operator()(const Vec3& n) const {
   // The band limits people use, unrolled at compile time (1.3x to 2x faster than the loop).
+  if (lmax_ <= 4) return sum_low_bands(n);
   switch (lmax_) {
-    case 2: return sum(std::integral_constant<int, 2>(), n);
-    case 4: return sum(std::integral_constant<int, 4>(), n);
     case 6: return sum(std::integral_constant<int, 6>(), n);
     case 8: return sum(std::integral_constant<int, 8>(), n);
     case 12: return sum(std::integral_constant<int, 12>(), n);

@@ -10,6 +10,7 @@
 #include "renderer/image.h"
 #include "renderer/math.h"
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -132,9 +133,14 @@ class ShDiffuseSum {
  private:
   template <typename Lmax>
   RGB sum(Lmax lmax, const Vec3& n) const;
+  // lmax <= 4 (the integrator's default): the 25 basis polynomials written out.
+  RGB sum_low_bands(const Vec3& n) const;
 
   int lmax_;
   std::vector<float> weighted_;  // Lambda_l h_l L_lm, channel-major: [c * sh_count(lmax) + index]
+  // For lmax <= 4: the same times each basis function's constant, per channel; bands
+  // above lmax are 0.
+  std::array<std::array<float, 25>, 3> low_band_{};
 };
 
 }  // namespace glaze

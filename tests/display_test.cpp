@@ -25,6 +25,9 @@ TEST(Display, ClampIsTheExposedValueAndSrgbIsTheStandardCurve) {
     EXPECT_EQ(srgb_encode_8bit(x), int(std::lround(255 * encoded))) << x;
   }
   EXPECT_EQ(srgb_encode_8bit(0.5f), 188);
+  EXPECT_EQ(srgb_encode_8bit(std::numeric_limits<float>::quiet_NaN()), 0);
+  EXPECT_EQ(srgb_encode_8bit(-1.0f), 0);
+  EXPECT_EQ(srgb_encode_8bit(7.0f), 255);
 }
 
 TEST(Display, FilmicAndAcesFollowTheirCurvesAndRollOff) {
@@ -55,6 +58,7 @@ TEST(Display, FilmicAndAcesFollowTheirCurvesAndRollOff) {
     EXPECT_EQ(tone_map(-1.0f, settings), 0.0f);
     EXPECT_EQ(tone_map(std::numeric_limits<float>::quiet_NaN(), settings), 0.0f);
     EXPECT_EQ(tone_map(std::numeric_limits<float>::infinity(), settings), 1.0f);
+    EXPECT_EQ(tone_map(3e38f, {10.0f, mapping}), 1.0f);  // overflows the exposure: still 1, not NaN
   }
   EXPECT_EQ(parse_tone_mapping("aces"), ToneMapping::aces);
   EXPECT_THROW(parse_tone_mapping("reinhard"), Error);

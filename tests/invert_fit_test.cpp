@@ -304,8 +304,10 @@ TEST(InvertFitJoint, WhiteSphereRecoversR0AndTheLightingScale) {
   const nlohmann::json& truth = result["reference_material"];
   EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
   for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.02) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
+    // Measured: Rd within 0.005 and the scale within 0.7% (the issue asks 0.003 and 3%;
+    // other scenes are further off, see the README).
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.008) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.01) << "channel " << c;
   }
   std::printf("joint: R0 %+.4f, Rd %+.4f %+.4f %+.4f against the truth; lighting scale %.4f %.4f %.4f\n",
               result["R0"].get<double>() - truth["R0"].get<double>(), result["Rd"][0].get<double>() - truth["Rd"][0].get<double>(),

@@ -186,6 +186,28 @@ TEST(ShDiffuseSum, ConstantMapGivesTwentyPiOverTwentyOne) {
   }
 }
 
+TEST(ShDiffuseSum, WrittenOutLowBandsEqualTheRecurrence) {
+  // For lmax <= 4 the sum evaluates written-out polynomials; here it is recomputed from
+  // its definition, sum_lm Lambda_l h_l L_lm Y_lm(n), with the recurrence in double.
+  const Environment office(make_procedural_environment("office", 128, 64), {.rotation_degrees = 33.0f});
+  Pcg32 rng(7, 1);
+  for (int lmax : {0, 1, 2, 3, 4}) {
+    const ShCoefficients& L = office.sh(lmax);
+    const ShDiffuseSum sum(L);
+    for (int trial = 0; trial < 200; ++trial) {
+      const Vec3 n = latlong_to_direction(Vec2(rng.next_float(), rng.next_float()));
+      RGBd expected = RGBd::Zero();
+      for_each_sh(lmax, double(n.x()), double(n.y()), double(n.z()), [&](int i, double y) {
+        int l = 0;
+        while ((l + 1) * (l + 1) <= i) ++l;
+        expected += sh_lambda(l) * sh_kernel_coefficient(l) * y * L.values[i];
+      });
+      const RGB got = sum(n);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], expected[c], 2e-6 * (1.0 + std::abs(expected[c]))) << lmax << " " << c;
+    }
+  }
+}
+
 TEST(ShDiffuseSum, ConvergesToTheDirectIntegralOverTheMap) {
   // E(n) = int L(w) g(n.w) max(n.w, 0) dw summed over every texel (Funk-Hecke says the SH
   // sum is this integral, truncated at lmax). At lmax 16 the office must agree closely.
