@@ -19,6 +19,7 @@
 #include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
+#include "renderer/latlong.h"
 #include "renderer/sh.h"
 #include "renderer/sh_integrator.h"
 

@@ -11,6 +11,8 @@
 
 namespace glaze {
 
+// Both take a set as read_transforms() returns it (checked).
+//
 // The object of `captures` as a scene of its own (no cameras, no environment). A sphere
 // gets one material; a glTF keeps its materials and textures. Every material is set to
 // `material` so that re-renders show the fitted one.

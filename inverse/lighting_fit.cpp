@@ -1,7 +1,6 @@
 #include "inverse/lighting_fit.h"
 
 #include "inverse/footprint.h"
-#include "inverse/texture_fit.h"  // texel_of
 #include "renderer/error.h"
 #include "renderer/latlong.h"
 #include "renderer/shading.h"

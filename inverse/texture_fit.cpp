@@ -1,17 +1,12 @@
 #include "inverse/texture_fit.h"
 
 #include "renderer/error.h"
+#include "renderer/latlong.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace glaze {
-
-int texel_of(const Vec2& uv, int width, int height) {
-  const int i = std::clamp(int(std::floor((uv.x() - std::floor(uv.x())) * width)), 0, width - 1);
-  const int j = std::clamp(int(std::floor(uv.y() * height)), 0, height - 1);
-  return j * width + i;
-}
 
 RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width, int height,
                              const MaterialFit& homogeneous, const MaterialFitOptions& options) {

@@ -21,9 +21,6 @@ struct RecoveredTexture {
   MaterialFit fit;           // the solver's account
 };
 
-// Texel index (row-major) of texture coordinate uv on a width x height grid; u wraps,
-// v is clamped.
-int texel_of(const Vec2& uv, int width, int height);
 
 // `homogeneous` is the homogeneous fit of the same samples (its R0 starts the search
 // and its Rd judges the weights).

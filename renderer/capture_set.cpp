@@ -298,6 +298,12 @@ class TransformsReader {
                       environment["procedural"].dump());
     if (environment.contains("scale")) number(environment["scale"], where, "scale", kNonNegative);
     if (environment.contains("rotation")) number(environment["rotation"], where, "rotation", kFinite);
+    if (environment.contains("to_world")) {
+      const json& rows = environment["to_world"];
+      if (!rows.is_array() || rows.size() != 3)
+        fail(where, "\"to_world\" must be 3 rows of 3 numbers (a rotation, row-major), not " + rows.dump());
+      for (int r = 0; r < 3; ++r) numbers(rows[r], 3, where, "to_world[" + std::to_string(r) + "]", kFinite);
+    }
     return environment;
   }
 

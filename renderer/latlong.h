@@ -4,6 +4,9 @@
 
 #include "renderer/math.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace glaze {
 
 // Unit direction of map coordinates uv; also gives sin(theta) if asked (samplers need it).
@@ -25,6 +28,14 @@ inline Vec2 direction_to_latlong(const Vec3& d, float* sin_theta_out = nullptr) 
   if (sin_theta_out) *sin_theta_out = rho / d.norm();
   const float v = fast_atan2(rho, d.y()) / kPi;
   return {u, std::min(v, 1.0f)};
+}
+
+// The texel of a width x height lat-long map that contains map coordinates uv (row-major
+// index; u wraps around, v is clamped to the map).
+inline int texel_of(const Vec2& uv, int width, int height) {
+  const int i = std::clamp(int(std::floor((uv.x() - std::floor(uv.x())) * width)), 0, width - 1);
+  const int j = std::clamp(int(std::floor(uv.y() * height)), 0, height - 1);
+  return j * width + i;
 }
 
 }  // namespace glaze

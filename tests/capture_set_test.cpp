@@ -750,6 +750,18 @@ TEST(CaptureSet, EnvironmentRotationBeyondFloatIsAnError) {
   EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"rotation\" must be a finite number"}));
 }
 
+TEST(CaptureSet, EnvironmentToWorldNotThreeRowsOfThreeNumbersIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["environment"] = {{"procedural", "office"}, {"to_world", {{1, 0, 0}, {0, 1, 0}}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "\"to_world\" must be 3 rows of 3 numbers"}));
+  transforms["environment"]["to_world"] = {{1, 0, 0}, {0, 1, 0}, {0, "one", 1}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "to_world[2]"}));
+  // A well-formed one comes back as it was, for the fit to use.
+  transforms["environment"]["to_world"] = {{0, 0, 1}, {0, 1, 0}, {-1, 0, 0}};
+  EXPECT_EQ(read_back(dir, transforms).environment["to_world"], transforms["environment"]["to_world"]);
+}
+
 TEST(CaptureSet, ZeroSaturationIsAnError) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
