@@ -45,7 +45,8 @@ int command_demo(const std::vector<std::string>& raw) {
   for (int c = 0; c < 3; ++c)
     std::printf("  %s %.5f      %.5f     %+.5f\n", channel[c], result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(),
                 result["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
-  std::printf("\n  held-out views re-rendered with the recovered material, relative RMSE:");
+  std::printf("\n  held-out views re-rendered with the recovered material, relative RMSE against their captures\n"
+              "  (mostly the captures' own Monte-Carlo noise at this spp; 0 would need noise-free captures):");
   for (const auto& view : result["holdout"]) std::printf(" %.4f", view["relative_rmse"].is_null() ? NAN : view["relative_rmse"].get<double>());
   std::printf("\n  images: the captures in %s, re-renders and residuals in %s\n", captures.c_str(), fit.c_str());
   return 0;

@@ -77,10 +77,10 @@ options of `preview` (also --res, --seed, --threads, --max-depth, --env..., --lm
   --exposure EV, --tone-map clamp|filmic|aces   how it is shown (default 0, filmic)
   --max-spp N         path passes stop here (default 4096)
   --save-dir DIR      where key S saves NAME_CAMERA_N.exr and .png (default .)
-  --frames N          show N rendered steps (one path pass or the sh image each,
+  --frames N          show N published steps (one path pass or the sh image each,
                       in lockstep, so always the same picture) and exit;
     --screenshot F.png  write what the window shows at the last one
-    --spin DEG        turn the camera DEG degrees about the object every frame
+    --spin DEG        turn the camera DEG degrees about the object after every frame
   Without a display (DISPLAY unset) it fails at once; headless: xvfb-run.
 
 options of `invert-fit`:
@@ -103,8 +103,8 @@ options of `invert-fit`:
   --preview           a window: each view observed, predicted and |residual| x8,
                       updated as the solver iterates (--frames N --screenshot F.png,
                       --exposure, --tone-map as for preview)
-  Writes DIR/fit.json, solver.txt, render_view_NNN.exr and residual_view_NNN.exr
-  (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
+  Writes DIR/fit.json, solver.txt (Ceres's report; for lighting, the linear
+  solve's), render_view_NNN.exr and residual_view_NNN.exr (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
   lighting.exr and lighting_coverage.png for --mode lighting.
 
 options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
@@ -169,6 +169,11 @@ int run(const std::vector<std::string>& args) {
   }
   const std::string command = args[0];
   const std::vector<std::string> rest(args.begin() + 1, args.end());
+  for (const std::string& arg : rest)
+    if (arg == "--help" || arg == "-h") {  // `glaze render --help`: the one help text
+      std::cout << kUsage;
+      return 0;
+    }
   if (command == "demo") return command_demo(rest);
   if (command == "sh") return command_sh(rest);
   if (command == "env") return command_env(rest);

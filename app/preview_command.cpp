@@ -131,7 +131,7 @@ int command_preview(const std::vector<std::string>& raw) {
   DisplaySettings display;
   display.exposure_ev = args.real("exposure", 0.0f);
   display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
-  require_display();  // before any loading: no display fails at once
+  require_display("glaze render");  // before any loading: no display fails at once
 
   const Scene scene = load_scene(args.positionals()[0]);
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
@@ -286,8 +286,8 @@ int command_preview(const std::vector<std::string>& raw) {
     window.wait_events(frames > 0 ? 0.0 : 1.0 / 60.0);
   }
   const double elapsed = seconds_since(start);
-  std::fprintf(stderr, "preview: first image %.3f s after launch; %d frames in %.2f s (%.1f frames/s)", first_image, shown,
-               elapsed, shown / std::max(elapsed, 1e-9));
+  std::fprintf(stderr, "preview: first image %.3f s after launch; %d frame%s in %.2f s (%.1f frames/s)", first_image, shown,
+               shown == 1 ? "" : "s", elapsed, shown / std::max(elapsed, 1e-9));
   if (frame && frame->sh_ss > 0)
     std::fprintf(stderr, "; sh %dx%d ss %d: %.1f ms an image", frame->camera.width, frame->camera.height, frame->sh_ss,
                  1e3 * frame->sh_seconds);

@@ -93,11 +93,11 @@ namespace {
 namespace {
 
 // glfwInit, or a glaze::Error that names DISPLAY.
-void initialise_glfw() {
+void initialise_glfw(const std::string& instead) {
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
     throw Error("cannot open a window: DISPLAY is not set (no X display). Run it on a desktop, over ssh -X, or "
-                "headless under xvfb-run; to render without a window: glaze render");
+                "headless under xvfb-run; without a window: " + instead);
   if (!glfwInit())
     throw Error("cannot open a window on DISPLAY=" + std::string(display) + ": " + last_glfw_error() +
                 " (is the X server running and reachable? headless: xvfb-run)");
@@ -105,13 +105,13 @@ void initialise_glfw() {
 
 }  // namespace
 
-void require_display() {
-  initialise_glfw();  // connects to the X server
+void require_display(const std::string& instead) {
+  initialise_glfw(instead);  // connects to the X server
   glfwTerminate();
 }
 
 PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
-  initialise_glfw();
+  initialise_glfw("glaze render");
   // From here on the constructor may still throw: release GLFW then.
   struct TerminateOnThrow {
     PreviewWindow& self;

@@ -20,7 +20,8 @@ namespace glaze {
 
 // Throws glaze::Error naming DISPLAY when no window can be opened here: DISPLAY unset,
 // or its X server not reachable (checked before long work starts, to fail at once).
-void require_display();
+// `instead` names what to run without a window, for the message.
+void require_display(const std::string& instead);
 
 class PreviewWindow {
  public:

@@ -101,8 +101,6 @@ JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, 
 
   // Start from the best of a coarse grid: for each R0 the channels separate, so each
   // channel's Rd is chosen on its own.
-  const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
-  const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
   std::array<double, 4> material{0.04, 0.5, 0.5, 0.5};
   double best = INFINITY;
   for (double R0 : {0.01, 0.02, 0.04, 0.07, 0.12, 0.2, 0.35, 0.6}) {

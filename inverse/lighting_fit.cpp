@@ -324,22 +324,25 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   const int width = options.width, height = options.height;
   std::vector<RGBd> sum(size_t(width) * height, RGBd::Zero());
   std::vector<double> weight(size_t(width) * height, 0.0);
-  double mirror_light = 0.0, all_light = 0.0;
+  RGBd mirror_light = RGBd::Zero(), all_light = RGBd::Zero();
+  double mirror_total = 0.0;
   const double q = 1.0 - R0;
   for (size_t k = 0; k < count; ++k) {
     const Eigen::Map<const Eigen::VectorXf> c(&data.c[k * n], n);
     const Eigen::Vector3d diffuse = kDiffuseNormalisation * q * Rd.cast<double>().matrix().cwiseProduct(L.transpose() * c.cast<double>());
     const RGBd mirror = data.observed[k].cast<double>() - diffuse.array();
     const double F = schlick_fresnel(double(R0), double(data.mu[k]));
-    mirror_light += std::max(0.0, mirror.sum());
-    all_light += data.observed[k].cast<double>().sum();
+    mirror_light += mirror.max(0.0);
+    mirror_total += std::max(0.0, mirror.sum());
+    all_light += data.observed[k].cast<double>();
     if (!(F > 0.0)) continue;
     const Vec2 uv = direction_to_latlong(data.reflected[k]);
     const size_t texel = texel_of(uv, width, height);
     sum[texel] += F * mirror;  // weight F^2 times the estimate mirror / F
     weight[texel] += F * F;
   }
-  fit.mirror_share = all_light > 0.0 ? mirror_light / all_light : 0.0;
+  fit.mirror_share = all_light.sum() > 0.0 ? mirror_total / all_light.sum() : 0.0;
+  for (int c = 0; c < 3; ++c) fit.channel_mirror_share[c] = all_light[c] > 0.0 ? mirror_light[c] / all_light[c] : 0.0;
   fit.map = Image(width, height);
   fit.covered.assign(size_t(width) * height, 0.0f);
   size_t covered = 0;

@@ -64,6 +64,7 @@ struct LightingFit {
   std::vector<float> covered;  // per texel: 1 if samples reached it
   double covered_fraction = 0.0;
   double mirror_share = 0.0;  // fraction of the observed light the mirror term carries
+  RGBd channel_mirror_share = RGBd::Zero();  // the same per channel
   // Fraction of the solve map's covered texels that two or more views reflect into; the
   // map-consistent solve needs several views per direction to separate the mirror from
   // the diffuse term, and falls back to the SH-only least squares below one half.

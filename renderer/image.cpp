@@ -88,11 +88,15 @@ namespace {
 void write_atomically(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeDesc format, const void* pixels,
                       const std::map<std::string, std::string>& metadata) {
   const std::filesystem::path target(path);
+  std::error_code exists_error;
+  const std::filesystem::path folder = target.parent_path();
+  if (!folder.empty() && !std::filesystem::is_directory(folder, exists_error))
+    throw Error(path + ": cannot be written, the folder " + folder.string() + " does not exist (create it first)");
   // The writer is chosen by the target's name (the temporary file keeps its extension).
   auto output = OIIO::ImageOutput::create(target.string());
   if (!output)
     throw Error(path + ": no image writer for the extension '" + target.extension().string() +
-                "' (use .exr for radiance, .png for a picture)");
+                "' (radiance: .exr, .hdr or .pfm; a picture: .png or .jpg)");
   std::filesystem::path temporary = target;
   // Same directory (so rename is atomic), same extension (so the format is chosen right).
   // (Built with append: GCC 12 gives a false -Wrestrict on a chain of operator+.)

@@ -67,6 +67,17 @@ TEST(Cli, BadInputGivesClearErrors) {
   std::ofstream(dir.file("empty.exr"));  // a zero-byte file
   expect_clear_failure(glaze("sh " + dir.file("empty.exr"), dir), "empty.exr");
   expect_clear_failure(glaze("env procedural office --out " + dir.file("no/such/dir/x.exr"), dir), "x.exr");
+  expect_clear_failure(glaze("env procedural office --out " + dir.file("no/such/dir/x.exr"), dir), "does not exist");
+  expect_clear_failure(glaze("env procedural office --out " + dir.file("x.nosuchformat"), dir), ".png or .jpg");
+}
+
+TEST(Cli, HelpAfterACommandPrintsTheHelp) {
+  testing::TemporaryDirectory dir;
+  for (const char* command : {"render --help", "invert-fit -h", "preview --help"}) {
+    const CommandResult run = glaze(command, dir);
+    EXPECT_EQ(run.exit_code, 0) << command << ": " << run.err;
+    EXPECT_NE(run.out.find("options of `invert-fit`"), std::string::npos) << command;
+  }
 }
 
 TEST(Cli, NonTwoToOneMapWarnsButWorks) {

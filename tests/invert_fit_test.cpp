@@ -333,6 +333,9 @@ TEST(InvertFitLighting, BadInputIsReported) {
   transforms.erase("material");
   std::ofstream(one + "/transforms.json") << transforms.dump();
   testing::expect_clear_failure(glaze("invert-fit " + one + " --mode lighting --out " + dir.file("x"), dir), "--R0");
+  // Half a known material is refused (it would silently take the other half from the set).
+  testing::expect_clear_failure(glaze("invert-fit " + one + " --mode lighting --R0 0.04 --out " + dir.file("x"), dir),
+                                "go together");
 }
 
 TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {

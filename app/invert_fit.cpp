@@ -1,0 +1,157 @@
+#include "app/invert_fit.h"
+
+#if GLAZE_HAVE_PREVIEW
+#include "app/fit_preview.h"
+#endif
+#include "inverse/capture_scene.h"
+#include "renderer/error.h"
+#include "renderer/image.h"
+#include "renderer/image_error.h"
+#include "renderer/sh.h"
+#include "renderer/sh_integrator.h"
+
+#include <cstdio>
+#include <fstream>
+
+namespace glaze::invert_fit {
+namespace {
+
+// Re-renders `frames` with the recovered material and writes them with residual images
+// (observed - predicted); returns per-view figures.
+nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& scene, const RayTracer& tracer,
+                        const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
+                        const std::string& prefix) {
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const PinholeCamera& camera = frames[f].camera;
+    const Image observed = read_image(frames[f].file_path);
+    if (observed.width != camera.width || observed.height != camera.height)
+      throw Error(frames[f].file_path + ": the image's size differs from its camera in transforms.json");
+    // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
+    const Image predicted = render_sh(scene, tracer, environment, camera, {lmax, footprint, true, 0});
+    Image residual(camera.width, camera.height);
+    for (size_t i = 0; i < residual.pixels.size(); ++i) residual.pixels[i] = observed.pixels[i] - predicted.pixels[i];
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_%03zu.exr", prefix.c_str(), f);
+    const std::string render_file = (out / ("render_" + std::string(name))).string();
+    const std::string residual_file = (out / ("residual_" + std::string(name))).string();
+    write_image(render_file, predicted, {{"glaze:integrator", "sh"}, {"glaze:lmax", std::to_string(lmax)}});
+    write_image(residual_file, residual);
+    nlohmann::json view = {{"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
+    const std::vector<uint8_t> mask = interior_mask(tracer, camera);
+    try {
+      view["relative_rmse"] = image_error(predicted, observed, mask).relative_rmse;
+    } catch (const Error&) {
+      view["relative_rmse"] = nullptr;  // the object covers no whole pixel in this view
+    }
+    views.push_back(view);
+  }
+  return views;
+}
+
+}  // namespace
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+nlohmann::json rgb_json(const RGB& c) { return {c[0], c[1], c[2]}; }
+
+nlohmann::json drops_json(const DropCounts& d) {
+  return {{"grazing", d.grazing}, {"silhouette", d.silhouette}, {"non_finite", d.non_finite},
+          {"saturated", d.saturated}, {"masked", d.masked}, {"hidden", d.hidden}};
+}
+
+
+FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds) {
+  FitInputs in;
+  in.captures = read_transforms(args.positionals()[0]);
+  in.scene = capture_object_scene(in.captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  in.tracer = std::make_unique<RayTracer>(in.scene);
+  SampleOptions sample_options;
+  sample_options.min_cos = args.real("min-cos", sample_options.min_cos);
+  sample_options.points = static_cast<int>(args.integer("points", 0, 0, 1 << 26));
+  sample_options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
+  const auto stage = Clock::now();
+  in.samples = collect_samples(in.captures, *in.tracer, in.scene, sample_options);
+  stage_seconds["samples"] = seconds_since(stage);
+  const DropCounts dropped = in.samples.total_dropped();
+  std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
+              in.samples.samples.size(), in.captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
+              dropped.saturated, dropped.masked, dropped.hidden);
+  return in;
+}
+
+void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report) {
+  if (!solver_report.empty()) {
+    std::ofstream report(out / "solver.txt");
+    report << solver_report;
+    if (!report) throw Error((out / "solver.txt").string() + ": could not be written");
+  }
+  const std::filesystem::path target = out / "fit.json", temporary = out / ".fit.json.tmp";
+  {
+    std::ofstream file(temporary);
+    file << result.dump(2) << '\n';
+    if (!file) throw Error(target.string() + ": could not be written");
+  }
+  std::filesystem::rename(temporary, target);
+}
+
+void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
+                   int footprint, const std::filesystem::path& out, nlohmann::json& result) {
+  result["renders"] = rerender(in.captures.frames, scene, *in.tracer, environment, lmax, footprint, out, "view");
+  const std::filesystem::path holdout = args.has("holdout-dir") ? std::filesystem::path(args.text("holdout-dir", ""))
+                                                                : std::filesystem::path(in.captures.directory) / "holdout";
+  if (args.has("holdout-dir") || std::filesystem::exists(holdout / "transforms.json")) {
+    const CaptureSet held_out = read_transforms(holdout.string());
+    result["holdout"] = rerender(held_out.frames, scene, *in.tracer, environment, lmax, footprint, out, "holdout");
+  }
+}
+
+std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_lmax) {
+  const nlohmann::json& r = captures.renderer;
+  auto integer = [&](const char* key, int low, int high, int fallback) {
+    if (!r.contains(key) || !r[key].is_number_integer()) return fallback;
+    const int value = r[key].get<int>();
+    return value >= low && value <= high ? value : fallback;
+  };
+  if (r.is_object() && r.value("integrator", "") == "sh") return {integer("ss", 1, 16, 4), integer("lmax", 0, kShMaxLmax, otherwise_lmax)};
+  return {4, otherwise_lmax};
+}
+
+#if GLAZE_HAVE_PREVIEW
+void begin_preview(FitPreview* preview, const FitInputs& in, int lmax, int footprint) {
+  if (!preview) return;
+  std::vector<FitPreview::View> views;
+  for (const CaptureFrame& frame : in.captures.frames) views.push_back({frame.camera, read_image(frame.file_path)});
+  preview->begin(std::move(views), *in.tracer, lmax, footprint);
+}
+
+void show_in_preview(FitPreview* preview, const Scene& object, float R0, const RGB& Rd,
+                     std::function<std::shared_ptr<const Environment>()> environment, const std::string& label) {
+  if (!preview) return;
+  auto scene = std::make_shared<Scene>(object);
+  for (SceneMaterial& m : scene->materials) m.R0 = R0, m.Rd = Rd;
+  preview->show({scene, std::move(environment), label});
+}
+
+FinishPreview::~FinishPreview() {
+  if (preview) preview->finish();
+}
+#else
+void begin_preview(FitPreview*, const FitInputs&, int, int) {}
+void show_in_preview(FitPreview*, const Scene&, float, const RGB&, std::function<std::shared_ptr<const Environment>()>,
+                     const std::string&) {}
+FinishPreview::~FinishPreview() = default;
+#endif
+
+std::string iterate_label(const FitIterate& it) {
+  char text[160];
+  std::snprintf(text, sizeof text, "iteration %d: R0 %.5f, Rd %.4f %.4f %.4f, cost %.4g", it.iteration, it.R0, it.Rd[0],
+                it.Rd[1], it.Rd[2], it.cost);
+  return text;
+}
+
+std::function<std::shared_ptr<const Environment>()> borrowed(const Environment& environment) {
+  return [&environment] { return std::shared_ptr<const Environment>(std::shared_ptr<const Environment>{}, &environment); };
+}
+
+}  // namespace glaze::invert_fit

@@ -1,0 +1,86 @@
+// invert_fit.h: the parts of `glaze invert-fit` that its modes share: the inputs every
+// mode starts from (capture set, object, samples), the defaults that match how the
+// captures were rendered, the outputs (fit.json, re-renders, residual images), and the
+// hooks of --preview. The modes live in invert_material.cpp (material, texture) and
+// invert_lighting.cpp (lighting, joint); invert_command.cpp parses the command line.
+#pragma once
+
+#include "app/arguments.h"
+#include "inverse/fit_progress.h"
+#include "inverse/samples.h"
+#include "renderer/capture_set.h"
+#include "renderer/environment.h"
+#include "renderer/ray_tracer.h"
+#include "renderer/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace glaze {
+
+class FitPreview;  // app/fit_preview.h (built with GLAZE_PREVIEW)
+
+namespace invert_fit {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start);
+nlohmann::json rgb_json(const RGB& c);
+nlohmann::json drops_json(const DropCounts& d);
+
+// What every mode starts from: the capture set, its object in the renderer's ray
+// tracer, and the samples.
+struct FitInputs {
+  CaptureSet captures;
+  Scene scene;
+  std::unique_ptr<RayTracer> tracer;
+  SampleSet samples;
+};
+FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds);
+
+// Writes fit.json (and the solver's report) atomically.
+void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report);
+
+// Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout-dir) with
+// `scene`'s material under `environment`, with residual images; per-view figures go to
+// result["renders"] and result["holdout"].
+void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
+                   int footprint, const std::filesystem::path& out, nlohmann::json& result);
+
+// Defaults that match how glaze rendered the captures, when transforms.json says: the sh
+// integrator's K x K sub-pixel grid is exactly a footprint of K, and its lmax is the
+// band its diffuse term was truncated at. Otherwise a footprint of 4 (a camera's, or the
+// path tracer's, box-filtered pixel) and `otherwise_lmax`. Returns {footprint, lmax}.
+std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_lmax);
+
+// --preview (each a no-op when `preview` is null or the build has no preview):
+// hands the window every capture view, observed, and the fit's pixel model;
+void begin_preview(FitPreview* preview, const FitInputs& in, int lmax, int footprint);
+// shows the object with material (R0, Rd) under the lighting `environment` gives;
+void show_in_preview(FitPreview* preview, const Scene& object, float R0, const RGB& Rd,
+                     std::function<std::shared_ptr<const Environment>()> environment, const std::string& label);
+// a label for the title bar from a solver iterate.
+std::string iterate_label(const FitIterate& it);
+// A borrowed environment as the preview's lighting function.
+std::function<std::shared_ptr<const Environment>()> borrowed(const Environment& environment);
+
+// Waits, when the scope ends, until the preview has drawn the last state: its render
+// thread reads the fit's geometry and lighting, which die with the scope. Declare it
+// after everything the preview's states borrow.
+struct FinishPreview {
+  FitPreview* preview;
+  ~FinishPreview();
+};
+
+// The modes. `preview` may be null.
+int invert_material(const Arguments& args, const std::filesystem::path& out, const std::string& mode, FitPreview* preview);
+int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint, FitPreview* preview);
+
+}  // namespace invert_fit
+}  // namespace glaze

@@ -1,0 +1,185 @@
+// invert_lighting.cpp: `invert-fit --mode lighting` (the lighting from an object of
+// known material, paper section 6) and `--mode joint` (material and lighting together,
+// section 7): fit.json with L_lm, the recovered map and its coverage mask, errors against
+// the set's own lighting when it names one, and re-renders under the recovered lighting.
+#include "app/invert_fit.h"
+#include "inverse/capture_scene.h"
+#include "inverse/joint_fit.h"
+#include "inverse/lighting_fit.h"
+#include "renderer/error.h"
+#include "renderer/image.h"
+#include "renderer/material.h"
+#include "renderer/sh.h"
+
+#include <cstdio>
+#include <optional>
+#include <tuple>
+
+namespace glaze::invert_fit {
+namespace {
+
+// The known material of --mode lighting: --R0 and --Rd, else the capture set's.
+PolishedMaterial known_material(const Arguments& args, const CaptureSet& captures) {
+  float R0 = -1.0f;
+  RGB Rd = RGB::Constant(-1.0f);
+  if (captures.material.contains("R0")) R0 = captures.material["R0"].get<float>();
+  if (captures.material.contains("Rd"))
+    for (int c = 0; c < 3; ++c) Rd[c] = captures.material["Rd"][c].get<float>();
+  R0 = args.real("R0", R0);
+  if (args.has("Rd")) {
+    const std::vector<float> values = args.reals("Rd");
+    if (values.size() != 3) throw Error("option --Rd needs three comma-separated numbers r,g,b");
+    Rd = RGB(values[0], values[1], values[2]);
+  }
+  if (R0 < 0.0f || (Rd < 0.0f).any()) {
+    const std::string missing = R0 < 0.0f ? (args.has("R0") ? "--R0 is negative" : "R0 is not given")
+                                          : (args.has("Rd") ? "--Rd is negative" : "Rd is not given");
+    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.directory +
+                "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
+  }
+  return PolishedMaterial(R0, Rd);  // validates the ranges
+}
+
+}  // namespace
+
+// --mode lighting: the lighting from an object of known material; --mode joint: the
+// material and the lighting together.
+int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
+  const auto start = Clock::now();
+  nlohmann::json stage_seconds;
+  FitInputs in = prepare_inputs(args, stage_seconds);
+  const int lmax = static_cast<int>(args.integer("lmax", 4, 0, 8));
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", capture_defaults(in.captures, 4).first, 1, 16));
+  LightingFitOptions options;
+  std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
+  options.ridge = args.real("ridge", float(options.ridge));
+  // The joint fit separates material from lighting by the variation within a texel of
+  // the solved map, so it takes a finer one (128x64 at 512x512 captures: still dozens of
+  // samples per texel); lighting alone is steadier on the coarser default.
+  const std::pair<int, int> solve_default = joint ? std::pair(128, 64) : std::pair(options.solve_width, options.solve_height);
+  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", solve_default);
+
+  auto stage = Clock::now();
+  const LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
+  stage_seconds["gather"] = seconds_since(stage);
+  begin_preview(preview, in, lmax, footprint);
+  const FinishPreview finish_preview{preview};
+  stage = Clock::now();
+  std::optional<JointFit> joint_fit;
+  FitObserver observer;
+  // The lighting at each iterate is solved on the preview's thread, for the newest only.
+  if (preview)
+    observer = [&](const FitIterate& it) {
+      show_in_preview(preview, in.scene, it.R0, it.Rd, [&data, &options, it] {
+        return std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map, EnvironmentOptions{}, "lighting at the iterate");
+      }, iterate_label(it));
+    };
+  if (joint) joint_fit = fit_joint(data, options, static_cast<int>(args.integer("max-iterations", 100, 1, 10000)), observer);
+  const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
+  const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
+  stage_seconds["fit"] = seconds_since(stage);
+
+  std::filesystem::create_directories(out);
+  const std::string map_file = (out / "lighting.exr").string(), mask_file = (out / "lighting_coverage.png").string();
+  write_image(map_file, fit.map, {{"glaze:lmax", std::to_string(lmax)}});
+  Image mask(fit.map.width, fit.map.height);
+  for (size_t t = 0; t < fit.covered.size(); ++t)
+    for (int c = 0; c < 3; ++c) mask.pixels[3 * t + c] = fit.covered[t];
+  write_image(mask_file, mask);
+  nlohmann::json L = nlohmann::json::array();
+  for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
+  nlohmann::json result = {{"mode", joint ? "joint" : "lighting"}, {"R0", material.R0()}, {"Rd", rgb_json(material.Rd())}, {"lmax", lmax},
+                           {"L_lm", L}, {"condition_number", fit.condition}, {"ridge", options.ridge},
+                           {"normal_coverage", data.normal_coverage}, {"map", map_file}, {"coverage_mask", mask_file},
+                           {"map_resolution", {options.width, options.height}}, {"solve_resolution", {options.solve_width, options.solve_height}}, {"covered_fraction", fit.covered_fraction},
+                           {"mirror_share", fit.mirror_share}, {"channel_mirror_share", rgb_json(fit.channel_mirror_share.cast<float>())}, {"multi_view_fraction", fit.multi_view_fraction},
+                           {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"}, {"samples", in.samples.samples.size()},
+                           {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint}};
+  if (fit.condition > 1e6)
+    warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
+         std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
+  if (joint) {
+    result["iterations"] = joint_fit->iterations;
+    result["converged"] = joint_fit->converged;
+    result["rms"] = joint_fit->rms;
+    result["solver"] = joint_fit->brief_report;
+  }
+  if (options.solve_width > 0 && !fit.map_consistent)
+    warn("only " + std::to_string(int(100 * fit.multi_view_fraction)) +
+         "% of the reflected directions are seen from two or more views: the mirror and the diffuse term cannot be "
+         "told apart there, so L_lm comes from the SH-only least squares (less accurate where the mirror dominates); "
+         "add views from other directions");
+  // A channel in which the mirror carries little of the light (a coloured object's own
+  // colour: the diffuse dominates) has a high-resolution map of noise amplified by 1/F,
+  // which the clamp at zero biases upwards; its L_lm stays sound.
+  for (int c = 0; c < 3; ++c)
+    if (fit.mirror_share >= 0.1 && fit.channel_mirror_share[c] < 0.1)
+      warn(std::string("in the ") + (c == 0 ? "red" : c == 1 ? "green" : "blue") + " channel the mirror carries only " +
+           std::to_string(int(100 * fit.channel_mirror_share[c])) +
+           "% of the light: that channel's high-resolution map is unreliable (noise divided by F, and biased up where it "
+           "is clamped at zero); its L_lm is not");
+  if (fit.mirror_share < 0.1)
+    warn("the mirror reflection carries only " + std::to_string(int(100 * fit.mirror_share)) +
+         "% of the observed light: the object is matte-like, so only the low frequencies (the SH part) are reliable; "
+         "the high-resolution map is noisy");
+
+  // Against the set's own lighting, when it names one: what a known-truth experiment checks.
+  if (const std::optional<EnvironmentSpec> truth = capture_environment(in.captures)) {
+    const Environment environment = make_environment(truth->source, truth->options, truth->width, truth->height);
+    const ShCoefficients& reference = environment.sh(lmax);
+    double worst = 0.0;
+    for (int i = 0; i < sh_count(std::min(lmax, 2)); ++i)
+      worst = std::max(worst, ((fit.coefficients.values[i] - reference.values[i]).abs() / reference.values[0].abs().max(1e-12)).maxCoeff());
+    result["reference_L_lm_error_l2"] = worst;  // max |L_lm - true| / L00 over l <= 2
+    // The absolute scale: recovered over true L00, per channel.
+    result["reference_scale"] = rgb_json((fit.coefficients.values[0] / reference.values[0]).cast<float>());
+    if (!in.captures.material.is_null()) result["reference_material"] = in.captures.material;
+    for (const auto& [w, h] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
+      if (options.width % w != 0 || options.height % h != 0) continue;
+      int cells = 0;
+      const double error = map_error(fit, environment, w, h, &cells);
+      result["reference_map_error"][std::to_string(w) + "x" + std::to_string(h)] = {{"relative_rmse", error}, {"cells", cells}};
+    }
+  }
+
+  stage = Clock::now();
+  // Shared with the preview's state, which may outlive this scope's locals.
+  const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
+  for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
+  show_in_preview(preview, in.scene, material.R0(), material.Rd(), [recovered] { return recovered; }, "recovered lighting");
+  write_renders(args, in, in.scene, *recovered, lmax, footprint, out, result);
+  stage_seconds["renders"] = seconds_since(stage);
+  result["stage_seconds"] = stage_seconds;
+  result["seconds"] = seconds_since(start);
+  // Lighting alone is linear least squares: its report says what was solved, and how well posed.
+  char linear_report[512];
+  std::snprintf(linear_report, sizeof linear_report,
+                "glaze lighting recovery: linear least squares (no iterations)\n"
+                "  L_lm, lmax %d: %d unknowns per channel; condition number %.4g (before the ridge %.3g)\n"
+                "  solve: %s at %dx%d (%.1f%% of its covered texels seen from two or more views)\n"
+                "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n",
+                lmax, sh_count(lmax), fit.condition, options.ridge,
+                fit.map_consistent ? "map-consistent (value and gradient per texel, with L_lm)" : "SH-only least squares",
+                options.solve_width, options.solve_height, 100 * fit.multi_view_fraction, in.samples.samples.size(),
+                fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2]);
+  write_fit(out, result, joint ? joint_fit->full_report : std::string(linear_report));
+  if (joint)
+    std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d iterations, %s)\n", material.R0(), material.Rd()[0],
+                material.Rd()[1], material.Rd()[2], joint_fit->iterations, joint_fit->converged ? "converged" : "NOT converged");
+  std::printf("lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
+              lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
+              100 * fit.mirror_share);
+  if (result.contains("reference_L_lm_error_l2"))
+  {
+    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00", 100 * result["reference_L_lm_error_l2"].get<double>());
+    if (result.contains("reference_map_error") && result["reference_map_error"].contains("64x32"))
+      std::printf("; map relative RMSE at 64x32 %.2f%% over %d covered cells",
+                  100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
+                  result["reference_map_error"]["64x32"]["cells"].get<int>());
+    std::printf("\n");
+  }
+  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  return 0;
+}
+
+}  // namespace glaze::invert_fit

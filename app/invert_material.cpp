@@ -1,0 +1,166 @@
+// invert_material.cpp: `invert-fit --mode material` (homogeneous R0 and RGB Rd: Ceres
+// over R0, closed-form Rd, DESIGN §5) and `--mode texture` (R0 and a diffuse texture
+// Rd(u, v), unknown texels alpha 0) under known lighting: fit.json, the solver's report,
+// per-view residuals, re-renders of every view and held-out view, texture.exr.
+#include "app/invert_fit.h"
+#include "inverse/capture_scene.h"
+#include "inverse/material_fit.h"
+#include "inverse/texture_fit.h"
+#include "renderer/error.h"
+#include "renderer/image.h"
+#include "renderer/latlong.h"
+#include "renderer/sh.h"
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+namespace glaze::invert_fit {
+
+// --mode material and texture: the material under known lighting.
+int invert_material(const Arguments& args, const std::filesystem::path& out, const std::string& mode, FitPreview* preview) {
+  const auto start = Clock::now();
+  nlohmann::json stage_seconds;
+
+  // The known lighting: the set's, or --env.
+  FitInputs in = prepare_inputs(args, stage_seconds);
+  const CaptureSet& captures = in.captures;
+  Scene& scene = in.scene;
+  const RayTracer& tracer = *in.tracer;
+  const SampleSet& samples = in.samples;
+  std::optional<EnvironmentSpec> spec = capture_environment(captures);
+  if (args.has("env")) spec = EnvironmentSpec{args.text("env", ""), spec ? spec->options : EnvironmentOptions{}};
+  if (!spec)
+    throw Error(captures.directory + "/transforms.json names no environment: --mode " + mode +
+                " needs the lighting; give --env FILE|procedural:NAME");
+  spec->options.scale = args.real("env-scale", spec->options.scale);
+  spec->options.rotation_degrees = args.real("env-rotation", spec->options.rotation_degrees);
+  const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);
+  const DropCounts dropped = samples.total_dropped();
+
+  // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
+  // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
+  const auto [default_footprint, default_lmax] = capture_defaults(captures, 16);
+  const int lmax = static_cast<int>(args.integer("lmax", default_lmax, 0, kShMaxLmax));
+  auto stage = Clock::now();
+  const int footprint = static_cast<int>(args.integer("pixel-footprint", default_footprint, 1, 16));
+  const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
+  stage_seconds["shading_terms"] = seconds_since(stage);
+  begin_preview(preview, in, lmax, footprint);
+  const FinishPreview finish_preview{preview};
+
+  MaterialFitOptions fit_options;
+  fit_options.loss = RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
+  fit_options.max_iterations = static_cast<int>(args.integer("max-iterations", 100, 1, 10000));
+  if (preview)
+    fit_options.observer = [&](const FitIterate& it) {
+      show_in_preview(preview, scene, it.R0, it.Rd, borrowed(environment), iterate_label(it));
+    };
+  stage = Clock::now();
+  MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
+  std::filesystem::create_directories(out);
+  nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.text("loss", "none")},
+                           {"pixel_footprint", footprint}};
+  std::optional<RecoveredTexture> texture;
+  if (mode == "material") {
+    result["Rd"] = rgb_json(fit.Rd[0]);
+    result["Rd_unclamped"] = rgb_json(fit.Rd_unclamped[0]);
+    // A channel no sample's diffuse term reaches (R0 = 1: a pure mirror) is unknown.
+    result["Rd_constrained"] = nlohmann::json::array();
+    for (int c = 0; c < 3; ++c) {
+      const bool constrained = fit.constraint[0][c] > 1e-12 * std::max(1.0, fit.constraint[0].maxCoeff());
+      result["Rd_constrained"].push_back(constrained);
+      if (!constrained)
+        warn(std::string("Rd ") + "RGB"[c] + " is not constrained by the data (no diffuse reflection seen: R0 = " +
+             std::to_string(fit.R0) + "); it is reported as 0");
+    }
+  } else {
+    const auto [width, height] = args.resolution("texture-res", {256, 128});
+    result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
+    fit_options.observer = nullptr;  // its per-texel iterates are not one material to show
+    texture = fit_texture(samples.samples, terms, width, height, fit, fit_options);
+    fit = texture->fit;
+    result["R0"] = fit.R0;
+    const std::string file = (out / "texture.exr").string();
+    write_image(file, texture->Rd, {{"glaze:R0", std::to_string(fit.R0)}}, texture->known);
+    result["texture"] = file;
+    result["texture_resolution"] = {width, height};
+    result["coverage"] = texture->coverage;
+    if (captures.material.contains("texture")) {
+      // The set's own texture, when it is a file (relative paths against the set): what
+      // a known-truth experiment compares with. Not fatal when it cannot be read.
+      RGB factor = RGB::Ones();
+      if (captures.material.contains("Rd"))
+        for (int c = 0; c < 3; ++c) factor[c] = captures.material["Rd"][c].get<float>();
+      std::filesystem::path reference(captures.material["texture"].get<std::string>());
+      if (reference.is_relative()) reference = std::filesystem::path(captures.directory) / reference;
+      try {
+        result["texture_rmse"] = texture_rmse(*texture, read_image(reference.string()), factor);
+      } catch (const Error& error) {
+        warn(std::string("the capture set's texture cannot be compared: ") + error.what());
+      }
+    }
+  }
+  stage_seconds["fit"] = seconds_since(stage);
+  result["rms"] = fit.rms;
+  result["samples"] = samples.samples.size();
+  result["dropped"] = drops_json(dropped);
+  result["iterations"] = fit.iterations;
+  result["converged"] = fit.converged;
+  result["solver"] = fit.brief_report;
+  if (!captures.material.is_null()) result["reference_material"] = captures.material;
+
+  // Per-view residuals over the samples, then re-renders of the inputs and held-out views.
+  nlohmann::json per_view = nlohmann::json::array();
+  {
+    std::vector<double> squared(captures.frames.size(), 0.0), observed(captures.frames.size(), 0.0);
+    for (size_t k = 0; k < samples.samples.size(); ++k) {
+      const Sample& s = samples.samples[k];
+      const RGB& Rd = fit.Rd[texture ? texel_of(s.uv, texture->Rd.width, texture->Rd.height) : 0];
+      squared[s.frame] += (s.observed - predict(terms[k], fit.R0, Rd)).cast<double>().square().sum();
+      observed[s.frame] += s.observed.cast<double>().square().sum();
+    }
+    for (size_t f = 0; f < captures.frames.size(); ++f) {
+      const double n = 3.0 * std::max<size_t>(samples.per_frame[f], 1);
+      per_view.push_back({{"file", captures.frames[f].file_path}, {"samples", samples.per_frame[f]},
+                          {"dropped", drops_json(samples.dropped[f])}, {"rms", std::sqrt(squared[f] / n)},
+                          {"relative_rms", observed[f] > 0 ? std::sqrt(squared[f] / observed[f]) : 0.0}});
+    }
+  }
+  result["views"] = per_view;
+
+  stage = Clock::now();
+  for (SceneMaterial& m : scene.materials) {
+    m.R0 = fit.R0;
+    m.Rd = texture ? RGB::Ones() : fit.Rd[0];
+    if (texture) {
+      m.texture = 0;  // unknown texels render black: nothing is invented
+      scene.textures = {Texture{"recovered texture", texture->Rd}};
+    }
+  }
+  // The scene already carries the fitted material (or texture): shown as it is.
+  if (preview) show_in_preview(preview, scene, scene.materials.front().R0, scene.materials.front().Rd, borrowed(environment),
+                               "final: R0 " + std::to_string(fit.R0));
+  write_renders(args, in, scene, environment, lmax, footprint, out, result);
+  stage_seconds["renders"] = seconds_since(stage);
+  result["stage_seconds"] = stage_seconds;
+  result["seconds"] = seconds_since(start);
+  write_fit(out, result, fit.full_report);
+
+  std::printf("R0 = %.5f", fit.R0);
+  if (!texture) std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);
+  else std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height, 100 * texture->coverage);
+  if (result.contains("texture_rmse")) std::printf(", texel RMSE against the reference %.4f", result["texture_rmse"].get<double>());
+  std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations, fit.converged ? "converged" : "NOT converged");
+  if (!captures.material.is_null() && captures.material.contains("R0")) {
+    std::printf("true R0 = %.5f", captures.material["R0"].get<double>());
+    if (captures.material.contains("Rd") && !texture)
+      std::printf(", Rd = %.5f %.5f %.5f", captures.material["Rd"][0].get<double>(), captures.material["Rd"][1].get<double>(),
+                  captures.material["Rd"][2].get<double>());
+    std::printf("\n");
+  }
+  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  return 0;
+}
+
+}  // namespace glaze::invert_fit
