@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -33,6 +34,34 @@ bool parse_integer(const std::string& token, long* value) {
   return true;
 }
 
+// Levenshtein distance, for "did you mean".
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// ", did you mean --X?" for the closest known option within two edits (or one that the
+// key begins with, or begins: --output for --out), else "".
+std::string suggestion(const std::string& key, const std::set<std::string>& allowed, const std::set<std::string>& flags) {
+  std::string best;
+  size_t best_distance = 3;
+  for (const std::set<std::string>* names : {&allowed, &flags})
+    for (const std::string& name : *names)
+      if (const size_t d = key.starts_with(name) || name.starts_with(key) ? 1 : edit_distance(key, name); d < best_distance)
+        best_distance = d, best = name;
+  return best.empty() ? "" : ", did you mean --" + best + "?";
+}
+
 }  // namespace
 
 Arguments::Arguments(const std::vector<std::string>& args, const std::set<std::string>& allowed,
@@ -46,7 +75,7 @@ Arguments::Arguments(const std::vector<std::string>& args, const std::set<std::s
         options_[key] = "";
         continue;
       }
-      if (!allowed.count(key)) throw Error("unknown option --" + key + " (see `glaze help`)");
+      if (!allowed.count(key)) throw Error("unknown option --" + key + suggestion(key, allowed, flags) + " (see `glaze help`)");
       if (i + 1 >= args.size()) throw Error("option --" + key + " needs a value");
       if (options_.count(key)) throw Error("option --" + key + " is given twice");
       options_[key] = args[++i];

@@ -60,6 +60,7 @@ TEST(Cli, BadInputGivesClearErrors) {
   expect_clear_failure(glaze("sh procedural:office --to-world 1,0,0,0,1,0", dir), "--to-world");
   expect_clear_failure(glaze("sh procedural:office --to-world 2,0,0,0,1,0,0,0,1", dir), "rotation");
   expect_clear_failure(glaze("sh procedural:office --bogus 1", dir), "--bogus");
+  expect_clear_failure(glaze("sh procedural:office --lmx 2", dir), "did you mean --lmax?");
   expect_clear_failure(glaze("frobnicate", dir), "frobnicate");
   expect_clear_failure(glaze("sh procedural:office --rotation 1e40", dir), "--rotation");
   expect_clear_failure(glaze("sh procedural:office --res 99999999999x5", dir), "--res");
