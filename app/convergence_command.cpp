@@ -8,6 +8,7 @@
 // of the render alone (all threads); for the sh integrator they include the SH
 // projection of the environment for that lmax, which a fresh process pays once.
 #include "app/arguments.h"
+#include "app/timing.h"
 #include "app/commands.h"
 #include "app/plot.h"
 #include "app/scene_options.h"
@@ -41,9 +42,6 @@ constexpr int kShSupersampling[] = {1, 2, 4};
 constexpr int kSplitLmax = 32, kSplitSupersampling = 8;
 constexpr double kTargets[] = {0.01, 0.003};
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 struct Row {
   std::string integrator, setting;

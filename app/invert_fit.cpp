@@ -51,7 +51,6 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
 
 }  // namespace
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 nlohmann::json rgb_json(const RGB& c) { return {c[0], c[1], c[2]}; }
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "app/arguments.h"
+#include "app/timing.h"
 #include "inverse/fit_progress.h"
 #include "inverse/samples.h"
 #include "renderer/capture_set.h"
@@ -29,8 +30,6 @@ class FitPreview;  // app/fit_preview.h (built with GLAZE_PREVIEW)
 
 namespace invert_fit {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start);
 nlohmann::json rgb_json(const RGB& c);
 nlohmann::json drops_json(const DropCounts& d);
 

@@ -3,6 +3,7 @@
 // and false-colour views, and saving. Headless: --frames N [--screenshot FILE.png]
 // shows N published steps in lockstep (the same image every run) and exits.
 #include "app/arguments.h"
+#include "app/timing.h"
 #include "app/commands.h"
 #include "app/orbit_camera.h"
 #include "app/preview_renderer.h"
@@ -39,8 +40,6 @@ constexpr const char* kKeyHelp = R"(glaze preview keys:
   H / F1               this help               Q / Esc   quit
 )";
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 enum class FalseColour { off, relative_error, n_dot_v };
 

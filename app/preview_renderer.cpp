@@ -1,5 +1,7 @@
 #include "app/preview_renderer.h"
 
+#include "app/timing.h"
+
 #include <tbb/parallel_for.h>
 
 #include <chrono>
@@ -24,9 +26,7 @@ std::vector<float> n_dot_v_image(const RayTracer& tracer, const PinholeCamera& c
   return values;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+
 
 }  // namespace
 

@@ -1,6 +1,7 @@
 // render_command.cpp: `glaze render`: images of a glTF scene's cameras, or a capture
 // set (DESIGN §4) for the inverse module.
 #include "app/arguments.h"
+#include "app/timing.h"
 #include "app/commands.h"
 #include "app/scene_options.h"
 #include "renderer/capture_set.h"
@@ -91,7 +92,7 @@ struct Job {
       metadata["glaze:max_depth"] = std::to_string(tracer.max_depth());
       summary = std::to_string(result.spp) + " spp";
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = seconds_since(start);
     metadata["glaze:seconds"] = std::to_string(seconds);
     if (is_picture(path)) {
       metadata["glaze:exposure"] = std::to_string(display.exposure_ev);
