@@ -11,6 +11,7 @@ int command_render(const std::vector<std::string>& args);
 int command_convergence(const std::vector<std::string>& args);
 int command_invert_fit(const std::vector<std::string>& args);
 int command_preview(const std::vector<std::string>& args);
+int command_reproduce(const std::vector<std::string>& args);
 
 // What `glaze preview` and `invert-fit --preview` say in a build without the window.
 inline constexpr const char* kNoPreview =

@@ -39,6 +39,9 @@ usage:
   glaze preview SCENE [--camera NAME] [--integrator path|sh]
                                  a window that shows the render as it refines;
                                  orbit, pan, zoom, exposure, tone mapping (H: keys)
+  glaze reproduce --out DIR [--quick]
+                                 the paper's experiments end to end (Table 2,
+                                 Figures 5-9, Table 3) with a report: DIR/report.md
   glaze help                     this text
 
 ENV is a lat-long image (EXR, HDR, PFM, ...) or procedural:NAME with NAME one of
@@ -106,6 +109,22 @@ options of `invert-fit`:
   Writes DIR/fit.json, solver.txt (Ceres's report; for lighting, the linear
   solve's), render_view_NNN.exr and residual_view_NNN.exr (observed - predicted), texture.exr (RGBA, alpha 0 = unknown) for --mode texture,
   lighting.exr and lighting_coverage.png for --mode lighting.
+
+options of `reproduce`:
+  --quick             the reduced run (160x160 captures, 64x32 textures, 128x64
+                      maps, a small convergence study): minutes, not the full hour
+  --env-res WxH       maps recovered by the lighting and joint fits (default 256x128)
+  --res WxH, --spp N  captures (default 512x512, 256 spp)
+  --texture-res WxH   textures of the textured sphere (default 256x128)
+  --lighting L,...    office, blue-room, map files or names under
+                      $GLAZE_DATA_DIR/envmaps (default: office, blue-room and
+                      --real-maps, default st_fagans_interior_1k.hdr,lebombo_1k.hdr,
+                      where present: absent ones are skipped, saying so)
+  --scenes DIR        glaze's scenes folder (default ./scenes, else the source tree's)
+  --no-convergence    leave out the error-against-run-time study
+  --threads N         worker threads (default: all cores)
+  Writes DIR/report.md (tables and figures side by side), DIR/results.json (every
+  number), DIR/figures/*.png, and the captures and fits behind them.
 
 options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
   --ref-spp N         path-trace the reference at N spp, in two halves whose
@@ -180,6 +199,7 @@ int run(const std::vector<std::string>& args) {
   if (command == "render") return command_render(rest);
   if (command == "convergence") return command_convergence(rest);
   if (command == "invert-fit") return command_invert_fit(rest);
+  if (command == "reproduce") return command_reproduce(rest);
   if (command == "preview") {
 #if GLAZE_HAVE_PREVIEW
     return command_preview(rest);

@@ -1,9 +1,9 @@
 #include "app/plot.h"
 
+#include "app/canvas.h"
+
 #include "renderer/error.h"
 #include "renderer/image.h"
-
-#include <OpenImageIO/imagebufalgo.h>
 
 #include <cmath>
 #include <cstdio>
@@ -31,66 +31,6 @@ std::string decade_label(int exponent) {
   return text;
 }
 
-class Canvas {
- public:
-  Canvas() : buffer_(OIIO::ImageSpec(kWidth, kHeight, 3, OIIO::TypeDesc::FLOAT)) {
-    const float white[3] = {1, 1, 1};
-    OIIO::ImageBufAlgo::fill(buffer_, white);
-  }
-  void line(int x0, int y0, int x1, int y1, const RGB& c, int thickness = 1) {
-    const float colour[3] = {c[0], c[1], c[2]};
-    for (int t = 0; t < thickness; ++t) {  // thicker lines as parallel offsets
-      const int o = t - thickness / 2;
-      const bool steep = std::abs(y1 - y0) > std::abs(x1 - x0);
-      OIIO::ImageBufAlgo::render_line(buffer_, x0 + (steep ? o : 0), y0 + (steep ? 0 : o), x1 + (steep ? o : 0),
-                                      y1 + (steep ? 0 : o), colour);
-    }
-  }
-  void dashed(int x0, int y, int x1, const RGB& c) {
-    for (int x = x0; x < x1; x += 12) line(x, y, std::min(x + 6, x1), y, c);
-  }
-  void box(int x0, int y0, int x1, int y1, const RGB& c, bool fill) {
-    const float colour[3] = {c[0], c[1], c[2]};
-    OIIO::ImageBufAlgo::render_box(buffer_, x0, y0, x1, y1, colour, fill);
-  }
-  void text(int x, int y, const std::string& s, int size, OIIO::ImageBufAlgo::TextAlignX ax,
-            OIIO::ImageBufAlgo::TextAlignY ay = OIIO::ImageBufAlgo::TextAlignY::Center) {
-    const float black[3] = {0, 0, 0};
-    if (!text_ok_) return;
-    text_ok_ = OIIO::ImageBufAlgo::render_text(buffer_, x, y, s, size, "DejaVuSans", black, ax, ay);
-    if (!text_ok_) (void)buffer_.geterror();
-  }
-  // Text turned 90 degrees, centred on (x, y): OIIO draws text horizontally only, so it
-  // is drawn on its own buffer and rotated into place.
-  void vertical_text(int x, int y, const std::string& s, int size) {
-    if (!text_ok_) return;
-    OIIO::ImageBuf label(OIIO::ImageSpec(kHeight, 40, 3, OIIO::TypeDesc::FLOAT));
-    const float white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
-    OIIO::ImageBufAlgo::fill(label, white);
-    text_ok_ = OIIO::ImageBufAlgo::render_text(label, kHeight / 2, 20, s, size, "DejaVuSans", black,
-                                               OIIO::ImageBufAlgo::TextAlignX::Center,
-                                               OIIO::ImageBufAlgo::TextAlignY::Center);
-    if (!text_ok_) return;
-    // Rotate 90 degrees counter-clockwise: label pixel (i, j) goes to (x - 20 + j, y + kHeight/2 - i).
-    std::vector<float> pixel(3);
-    for (int j = 0; j < 40; ++j)
-      for (int i = 0; i < kHeight; ++i) {
-        label.getpixel(i, j, pixel.data(), 3);
-        if (pixel[0] < 0.99f) buffer_.setpixel(x - 20 + j, y + kHeight / 2 - i, pixel.data(), 3);
-      }
-  }
-  bool text_ok() const { return text_ok_; }
-
-  void write(const std::string& path) {
-    Image image(kWidth, kHeight);
-    buffer_.get_pixels(OIIO::ROI(0, kWidth, 0, kHeight, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT, image.pixels.data());
-    write_image(path, image);
-  }
-
- private:
-  OIIO::ImageBuf buffer_;
-  bool text_ok_ = true;
-};
 
 }  // namespace
 
@@ -112,7 +52,7 @@ void write_loglog_plot(const std::string& path, const LogLogPlot& plot) {
   };
   using AlignX = OIIO::ImageBufAlgo::TextAlignX;
   using AlignY = OIIO::ImageBufAlgo::TextAlignY;
-  Canvas canvas;
+  Canvas canvas(kWidth, kHeight);
   const RGB grid(0.88f, 0.88f, 0.88f), minor(0.95f, 0.95f, 0.95f), axis(0.0f, 0.0f, 0.0f);
 
   // Grid: decades and their 2..9 subdivisions; decade labels on both axes.
@@ -129,7 +69,7 @@ void write_loglog_plot(const std::string& path, const LogLogPlot& plot) {
   canvas.box(kLeft, kTop, right, bottom, axis, false);
   canvas.text((kLeft + right) / 2, 28, plot.title, 20, AlignX::Center);
   canvas.text((kLeft + right) / 2, bottom + 50, plot.x_label, 17, AlignX::Center);
-  canvas.vertical_text(30, (kTop + bottom) / 2, plot.y_label, 17);
+  canvas.vertical_text(30, (kTop + bottom) / 2, plot.y_label, 17, kHeight);
 
   // Reference lines, then the series with their legend entries.
   int legend_y = kTop + 12;
@@ -154,7 +94,7 @@ void write_loglog_plot(const std::string& path, const LogLogPlot& plot) {
   }
   canvas.write(path);
   if (!canvas.text_ok())
-    warn(path + ": the plot has no text (no TrueType font found; install fonts-dejavu-core, e.g. apt-get install fonts-dejavu-core)");
+    warn(path + ": the plot has no text " + std::string(Canvas::kNoFont));
 }
 
 }  // namespace glaze

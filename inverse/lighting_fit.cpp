@@ -349,7 +349,12 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
       const size_t texel = size_t(j) * width + i;
-      if (weight[texel] > 0.0) {
+      // A texel is covered when its samples' mirror weight adds up to at least one sample
+      // at F = 0.01: below that the mirror carries under 1% of what they saw, and
+      // (o - diffuse) / F is the diffuse model's residual amplified a hundredfold or
+      // more (a matte coat, R0 near 0, seen near the normal), not the lighting.
+      constexpr double kMinMirrorWeight = 1e-4;
+      if (weight[texel] >= kMinMirrorWeight) {
         fit.map.set(i, j, (sum[texel] / weight[texel]).cast<float>().max(0.0));
         fit.covered[texel] = 1.0f;
         ++covered;

@@ -61,7 +61,7 @@ struct LightingFit {
   ShCoefficients coefficients;
   double condition = 0.0;  // of the least-squares system before the ridge (worst channel)
   Image map;               // lat-long, world frame (DESIGN §3)
-  std::vector<float> covered;  // per texel: 1 if samples reached it
+  std::vector<float> covered;  // per texel: 1 if samples reached it with mirror weight (sum F^2 >= 1e-4)
   double covered_fraction = 0.0;
   double mirror_share = 0.0;  // fraction of the observed light the mirror term carries
   RGBd channel_mirror_share = RGBd::Zero();  // the same per channel

@@ -22,7 +22,7 @@ float srgb_to_linear(float encoded) {
 namespace {
 
 // Reads an opened image as linear RGB; `name` is used in messages.
-Image decode(OIIO::ImageInput& input, const std::string& name) {
+Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float>* alpha) {
   const OIIO::ImageSpec& spec = input.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
     throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" +
@@ -56,12 +56,17 @@ Image decode(OIIO::ImageInput& input, const std::string& name) {
       image.pixels[i * 3 + c] = srgb_encoded ? srgb_to_linear(value) : value;
     }
   }
+  if (alpha) {  // alpha is never sRGB-encoded
+    alpha->assign(count, 1.0f);
+    if (spec.alpha_channel >= 0)
+      for (size_t i = 0; i < count; ++i) (*alpha)[i] = raw[i * channels + spec.alpha_channel];
+  }
   return image;
 }
 
 }  // namespace
 
-Image read_image(const std::string& path) {
+Image read_image(const std::string& path, std::vector<float>* alpha) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw Error(path + ": no such file (check the path; environment maps are lat-long EXR, HDR or PFM images)");
@@ -71,14 +76,14 @@ Image read_image(const std::string& path) {
     throw Error(path + ": cannot be read as an image (" + OIIO::geterror() +
                 "); expected a float image such as EXR, HDR or PFM");
   }
-  return decode(*input, path);
+  return decode(*input, path, alpha);
 }
 
 Image read_image_from_memory(const unsigned char* bytes, size_t size, const std::string& name) {
   OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(bytes), size);
   auto input = OIIO::ImageInput::open(name, nullptr, &reader);
   if (!input) throw Error(name + ": cannot be decoded as an image (" + OIIO::geterror() + ")");
-  return decode(*input, name);
+  return decode(*input, name, nullptr);
 }
 
 namespace {

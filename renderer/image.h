@@ -38,7 +38,8 @@ struct Image {
 // Reads `path` as linear RGB (grey is replicated, alpha and extra channels dropped).
 // Integer formats (PNG, JPEG, ...) are decoded from sRGB unless tagged linear.
 // Throws glaze::Error for a missing, unreadable, truncated, empty or absurdly large image.
-Image read_image(const std::string& path);
+// `alpha`, if given, receives the alpha channel (one value per pixel; 1 where there is none).
+Image read_image(const std::string& path, std::vector<float>* alpha = nullptr);
 
 // The same for an image held in memory (a glTF data URI or .glb chunk); `name` picks
 // the format by its extension and appears in messages.

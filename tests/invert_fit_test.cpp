@@ -17,17 +17,16 @@
 namespace glaze {
 namespace {
 
+using testing::add_multiplicative_noise;
 using testing::CommandResult;
+using testing::read_json;
+using testing::rewrite_frames;
+using testing::sphere_scene_file;
 using testing::TemporaryDirectory;
 
-const std::string kScenes = std::string(GLAZE_SOURCE_DIR) + "/scenes/";
+const std::string kScenes = testing::scenes_dir();
 
 CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) { return testing::run_glaze(arguments, dir); }
-
-nlohmann::json read_json(const std::string& path) {
-  std::ifstream file(path);
-  return nlohmann::json::parse(file);
-}
 
 // Renders SCENE's capture set into dir/NAME with the given renderer options.
 std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name,
@@ -65,75 +64,15 @@ TEST(InvertFit, ShCapturesRecoverTheMaterialExactly) {
   }
 }
 
-void path_traced_round_trip(const std::string& scene, const std::string& environment) {
-  TemporaryDirectory dir;
-  const std::string folder = captures(dir, scene, "path", "--spp 256 --res 96x96 " + environment);
-  expect_material(fit(dir, folder, "--mode material"), 0.002, 0.005);
-}
-
-TEST(InvertFit, PathTracedCapturesRedOffice) { path_traced_round_trip("red_sphere_office.gltf", ""); }
-TEST(InvertFit, PathTracedCapturesWhiteOffice) { path_traced_round_trip("white_sphere_office.gltf", ""); }
-TEST(InvertFit, PathTracedCapturesRedBlueRoom) { path_traced_round_trip("red_sphere_blue_room.gltf", ""); }
-TEST(InvertFit, PathTracedCapturesWhiteBlueRoom) { path_traced_round_trip("white_sphere_blue_room.gltf", ""); }
-
-TEST(InvertFit, PathTracedCapturesUnderRealMaps) {
-  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr"}) {
-    GLAZE_REQUIRE_ENVMAP(map, name);
-    SCOPED_TRACE(name);
-    for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
-      SCOPED_TRACE(scene);
-      path_traced_round_trip(scene, "--env " + map.string());
-    }
-  }
-}
-
-// Scales every frame of the capture set in `folder` by `transform(pixel value, rng)`.
-template <typename Transform>
-void rewrite_frames(const std::string& folder, Transform transform) {
-  const nlohmann::json transforms = read_json(folder + "/transforms.json");
-  Pcg32 rng(7);
-  for (const auto& frame : transforms["frames"]) {
-    const std::string file = folder + "/" + frame["file_path"].get<std::string>();
-    Image image = read_image(file);
-    for (float& value : image.pixels) value = transform(value, rng);
-    write_image(file, image);
-  }
-}
-
-// A copy of red_sphere_office.gltf with material (R0, Rd), written into dir.
-std::string sphere_scene_file(const TemporaryDirectory& dir, float R0, const RGB& Rd) {
-  nlohmann::json scene = read_json(kScenes + "red_sphere_office.gltf");
-  scene["materials"][0]["extras"]["glaze"] = {{"R0", R0}, {"Rd", {Rd[0], Rd[1], Rd[2]}}};
-  scene["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {Rd[0], Rd[1], Rd[2], 1.0};
-  const std::string file = dir.file("sphere.gltf");
-  std::ofstream(file) << scene.dump();
-  return file;
-}
-
-TEST(InvertFit, TexturedSphereTexelsWithinTwoPercent) {
-  TemporaryDirectory dir;
-  const std::string folder = captures(dir, "textured_sphere_office.gltf", "textured", "--spp 256 --res 192x192 --holdout novel_0,novel_1");
-  const nlohmann::json result = fit(dir, folder, "--mode texture --texture-res 64x32");
-  EXPECT_NEAR(result["R0"].get<double>(), 0.04, 0.002);
-  EXPECT_LT(result["texture_rmse"].get<double>(), 0.02);
-  EXPECT_GT(result["coverage"].get<double>(), 0.5);  // four views around the equator: not the poles
-  std::printf("texture: texel RMSE %.4f over the known texels, coverage %.1f%%\n", result["texture_rmse"].get<double>(),
-              100 * result["coverage"].get<double>());
-  EXPECT_EQ(result["holdout"].size(), 2u);
-  const Image texture = read_image(folder + "/fit/texture.exr");
-  EXPECT_EQ(texture.width, 64);
-}
+// Path-traced round trips (red, white and textured spheres in both lightings and under
+// two real maps, 256 spp) run as the paper's Table 2 in reproduce_test.cpp.
 
 TEST(InvertFit, FivePercentNoiseKeepsEstimatesWithinOnePercent) {
   TemporaryDirectory dir;
   for (const char* scene : {"red_sphere_office.gltf", "white_sphere_blue_room.gltf"}) {
     SCOPED_TRACE(scene);
     const std::string folder = captures(dir, scene, std::string("noisy_") + scene, "--integrator sh --ss 1 --res 96x96");
-    rewrite_frames(folder, [](float value, Pcg32& rng) {
-      // Gaussian by Box-Muller, 5% multiplicative
-      const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
-      return value * (1.0f + 0.05f * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
-    });
+    add_multiplicative_noise(folder, 0.05f);  // 5%, Gaussian
     expect_material(fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
   }
 }

@@ -1,15 +1,21 @@
 // test_support.h: helpers shared by the test suites: where the real data lives, a
-// temporary directory, capturing warnings, a chi-square goodness-of-fit test, and the
-// unit sphere seen from the front that many renderer tests look at.
+// temporary directory, capturing warnings, running the glaze command, capture sets
+// (a sphere scene of any material, rewriting or adding noise to its frames), a
+// chi-square goodness-of-fit test, and the unit sphere seen from the front that many
+// renderer tests look at.
 #pragma once
 
 #include "renderer/camera.h"
 #include "renderer/error.h"
+#include "renderer/image.h"
+#include "renderer/rng.h"
 #include "renderer/scene.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -121,6 +127,63 @@ inline void expect_clear_failure(const CommandResult& run, const std::string& mu
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(run.err.find("glaze: error:"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find(must_mention), std::string::npos) << run.err;
+}
+
+// The repository's scenes/ folder, with a trailing slash.
+inline std::string scenes_dir() { return std::string(GLAZE_SOURCE_DIR) + "/scenes/"; }
+
+inline nlohmann::json read_json(const std::string& path) {
+  std::ifstream file(path);
+  return nlohmann::json::parse(file);
+}
+
+// Rewrites every frame of the capture set in `folder`: each pixel value becomes
+// `transform(value, rng)`, with one generator (seed 7) over all frames in order.
+template <typename Transform>
+void rewrite_frames(const std::string& folder, Transform transform) {
+  const nlohmann::json transforms = read_json(folder + "/transforms.json");
+  Pcg32 rng(7);
+  for (const auto& frame : transforms["frames"]) {
+    const std::string file = folder + "/" + frame["file_path"].get<std::string>();
+    Image image = read_image(file);
+    for (float& value : image.pixels) value = transform(value, rng);
+    write_image(file, image);
+  }
+}
+
+// Every number anywhere in `value` is finite. nlohmann writes NaN and infinities as
+// null, so a null is one too.
+inline void expect_all_finite(const nlohmann::json& value, const std::string& where) {
+  if (value.is_null()) {
+    ADD_FAILURE() << where << " is null (a NaN or an infinity written to JSON)";
+  } else if (value.is_number()) {
+    EXPECT_TRUE(std::isfinite(value.get<double>())) << where << " = " << value.dump();
+  } else if (value.is_object()) {
+    for (const auto& [key, item] : value.items()) expect_all_finite(item, where + "." + key);
+  } else if (value.is_array()) {
+    for (size_t i = 0; i < value.size(); ++i) expect_all_finite(value[i], where + "[" + std::to_string(i) + "]");
+  }
+}
+
+// Multiplies every pixel value of the capture set in `folder` by 1 + sigma * N(0, 1)
+// (Gaussian by Box-Muller): sigma = 0.05 is "5% noise".
+inline void add_multiplicative_noise(const std::string& folder, float sigma) {
+  rewrite_frames(folder, [sigma](float value, Pcg32& rng) {
+    const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
+    return value * (1.0f + sigma * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
+  });
+}
+
+// A copy of scenes/red_sphere_office.gltf (the unit sphere, three input views and two
+// novel ones, the procedural office) with material (R0, Rd), written to dir/NAME.
+inline std::string sphere_scene_file(const TemporaryDirectory& dir, float R0, const RGB& Rd,
+                                     const std::string& name = "sphere.gltf") {
+  nlohmann::json scene = read_json(scenes_dir() + "red_sphere_office.gltf");
+  scene["materials"][0]["extras"]["glaze"] = {{"R0", R0}, {"Rd", {Rd[0], Rd[1], Rd[2]}}};
+  scene["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {Rd[0], Rd[1], Rd[2], 1.0};
+  const std::string file = dir.file(name);
+  std::ofstream(file) << scene.dump();
+  return file;
 }
 
 // Upper tail probability of the chi-square distribution (regularised incomplete gamma
