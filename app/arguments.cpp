@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <sstream>
 
 namespace glaze {
 namespace {
@@ -132,6 +133,14 @@ std::vector<float> Arguments::reals(const std::string& key) const {
     if (comma == std::string::npos) return values;
     start = comma + 1;
   }
+}
+
+std::vector<std::string> Arguments::names(const std::string& key, const std::string& fallback) const {
+  std::vector<std::string> names;
+  std::stringstream stream(text(key, fallback));
+  for (std::string name; std::getline(stream, name, ',');)
+    if (!name.empty()) names.push_back(name);
+  return names;
 }
 
 }  // namespace glaze

@@ -28,6 +28,8 @@ class Arguments {
   std::pair<int, int> resolution(const std::string& key, std::pair<int, int> fallback) const;
   // Comma-separated finite numbers.
   std::vector<float> reals(const std::string& key) const;
+  // Comma-separated names (empty items skipped); `fallback` when the option is absent.
+  std::vector<std::string> names(const std::string& key, const std::string& fallback = "") const;
 
  private:
   std::vector<std::string> positionals_;

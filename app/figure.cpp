@@ -17,6 +17,8 @@ int shrink_factor(int width, int height, int max_size) {
 }
 
 // Box filter by a whole factor (partial blocks at the edges average what they have).
+// Non-finite pixels (an error image's "not compared") stay out of the averages; a block
+// with none finite stays NaN.
 Image shrink(const Image& image, int factor) {
   if (factor == 1) return image;
   Image small((image.width + factor - 1) / factor, (image.height + factor - 1) / factor);
@@ -25,8 +27,9 @@ Image shrink(const Image& image, int factor) {
       RGB sum = RGB::Zero();
       int count = 0;
       for (int j = y * factor; j < std::min(image.height, (y + 1) * factor); ++j)
-        for (int i = x * factor; i < std::min(image.width, (x + 1) * factor); ++i) sum += image.at(i, j), ++count;
-      small.set(x, y, sum / float(count));
+        for (int i = x * factor; i < std::min(image.width, (x + 1) * factor); ++i)
+          if (const RGB c = image.at(i, j); c.allFinite()) sum += c, ++count;
+      small.set(x, y, count ? RGB(sum / float(count)) : RGB::Constant(NAN));
     }
   return small;
 }
@@ -74,7 +77,7 @@ FigurePanel error_panel(const Image& image, const Image& reference, std::span<co
   for (size_t p = 0; p < mask.size(); ++p)
     if (mask[p]) sum += reference.pixels[3 * p] + reference.pixels[3 * p + 1] + reference.pixels[3 * p + 2], count += 3;
   const double mean = count ? sum / count : 0.0;
-  Image error(image.width, image.height);  // the error in every channel, so that shrinking averages it
+  Image error(image.width, image.height);  // NaN where not compared
   for (size_t p = 0; p < mask.size(); ++p) {
     float worst = NAN;
     if (mask[p] && mean > 0.0) {
@@ -84,19 +87,10 @@ FigurePanel error_panel(const Image& image, const Image& reference, std::span<co
     }
     for (int c = 0; c < 3; ++c) error.pixels[3 * p + c] = worst;
   }
-  // Shrink with NaN (outside the mask) kept out of the averages.
-  const int factor = shrink_factor(image.width, image.height, max_size);
-  const int width = (image.width + factor - 1) / factor, height = (image.height + factor - 1) / factor;
-  std::vector<float> values(size_t(width) * height, NAN);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      double block = 0.0;
-      int n = 0;
-      for (int j = y * factor; j < std::min(image.height, (y + 1) * factor); ++j)
-        for (int i = x * factor; i < std::min(image.width, (x + 1) * factor); ++i)
-          if (const float v = error.pixels[3 * (size_t(j) * image.width + i)]; std::isfinite(v)) block += v, ++n;
-      if (n) values[size_t(y) * width + x] = float(block / n);
-    }
+  const Image sized = enlarge(shrink(error, shrink_factor(image.width, image.height, max_size)), max_size);
+  const int width = sized.width, height = sized.height;
+  std::vector<float> values(size_t(width) * height);
+  for (size_t p = 0; p < values.size(); ++p) values[p] = sized.pixels[3 * p];
   return {width, height, false_colour_image(values, width, height, 0.0f, full_scale, false), caption};
 }
 

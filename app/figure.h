@@ -27,7 +27,7 @@ FigurePanel picture_panel(const Image& image, const DisplaySettings& display, co
 
 // |image - reference| / (reference's mean over the mask), per pixel the largest over the
 // channels, in false colour from 0 (dark) to `full_scale` (yellow); pixels outside the
-// mask (1 = compared) are black. Same shrinking as picture_panel.
+// mask (1 = compared) are black. Sized as picture_panel sizes its picture.
 FigurePanel error_panel(const Image& image, const Image& reference, std::span<const uint8_t> mask, float full_scale,
                         const std::string& caption, int max_size = 256);
 

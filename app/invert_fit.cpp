@@ -9,9 +9,9 @@
 #include "renderer/image_error.h"
 #include "renderer/sh.h"
 #include "renderer/sh_integrator.h"
+#include "renderer/text_file.h"
 
 #include <cstdio>
-#include <fstream>
 
 namespace glaze::invert_fit {
 namespace {
@@ -80,18 +80,8 @@ FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds) {
 }
 
 void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report) {
-  if (!solver_report.empty()) {
-    std::ofstream report(out / "solver.txt");
-    report << solver_report;
-    if (!report) throw Error((out / "solver.txt").string() + ": could not be written");
-  }
-  const std::filesystem::path target = out / "fit.json", temporary = out / ".fit.json.tmp";
-  {
-    std::ofstream file(temporary);
-    file << result.dump(2) << '\n';
-    if (!file) throw Error(target.string() + ": could not be written");
-  }
-  std::filesystem::rename(temporary, target);
+  if (!solver_report.empty()) write_text_atomically((out / "solver.txt").string(), solver_report);
+  write_text_atomically((out / "fit.json").string(), result.dump(2) + "\n");
 }
 
 void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,

@@ -21,7 +21,6 @@
 #include <map>
 #include <set>
 #include <iostream>
-#include <sstream>
 
 namespace glaze {
 namespace {
@@ -40,14 +39,6 @@ std::string materials_json(const Scene& scene) {
     list.push_back(entry);
   }
   return list.dump();
-}
-
-std::vector<std::string> split_names(const std::string& text) {
-  std::vector<std::string> names;
-  std::stringstream stream(text);
-  for (std::string name; std::getline(stream, name, ',');)
-    if (!name.empty()) names.push_back(name);
-  return names;
 }
 
 // An 8-bit picture for people (display.h) rather than radiance.
@@ -218,7 +209,7 @@ int command_render(const std::vector<std::string>& raw) {
                 args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt, display};
 
   if (args.has("captures")) {
-    write_captures(job, args.text("captures", ""), split_names(args.text("holdout", "")), environment);
+    write_captures(job, args.text("captures", ""), args.names("holdout"), environment);
     return 0;
   }
   const std::string camera_name = args.text("camera", scene.cameras.front().name);

@@ -28,6 +28,7 @@
 #include "renderer/image_error.h"
 #include "renderer/scene.h"
 #include "renderer/sh_integrator.h"
+#include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -37,6 +38,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
 
 namespace glaze {
@@ -53,14 +55,20 @@ struct Lighting {
 
 const char* const kHomogeneous[] = {"red", "white"};
 
+using Size = std::pair<int, int>;  // width, height
+
+// "WxH", as the commands take it.
+std::string size_text(const Size& size) { return std::to_string(size.first) + "x" + std::to_string(size.second); }
+
 struct Settings {
   fs::path out, scenes;
-  std::string resolution, texture_resolution, lighting_resolution;
+  Size resolution, texture_resolution, lighting_resolution;
   int spp = 256;
   int transfer_lmax = 16;
   std::vector<Lighting> lightings;
   std::string threads;  // empty: all cores
-  std::string convergence_res, convergence_ref_spp;
+  Size convergence_resolution;
+  int convergence_ref_spp = 65536;
   bool convergence = true;
 };
 
@@ -72,16 +80,6 @@ json read_json(const fs::path& path) {
   std::ifstream file(path);
   if (!file) throw Error(path.string() + ": missing (a step of reproduce did not write it)");
   return json::parse(file);
-}
-
-void write_text_atomically(const fs::path& path, const std::string& text) {
-  const fs::path temporary = path.parent_path() / ("." + path.filename().string() + ".tmp");
-  {
-    std::ofstream file(temporary);
-    file << text;
-    if (!file) throw Error(path.string() + ": could not be written");
-  }
-  fs::rename(temporary, path);
 }
 
 std::string fixed(double value, int digits) {
@@ -115,14 +113,6 @@ std::vector<std::string> with_threads(std::vector<std::string> args, const Setti
   return args;
 }
 
-// The lighting's true environment as the scene (or the --env override) defines it.
-Environment true_environment(const Scene& scene, const Lighting& l) {
-  std::vector<std::string> raw;
-  if (!l.env.empty()) raw = {"--env", l.env};
-  const EnvironmentSpec spec = environment_spec(scene, Arguments(raw, {"env"}));
-  return make_environment(spec.source, spec.options, spec.width, spec.height);
-}
-
 // The scene of `object` in lighting `l` with its material replaced.
 Scene with_material(Scene scene, float R0, const RGB& Rd) {
   for (SceneMaterial& m : scene.materials) m.R0 = R0, m.Rd = Rd;
@@ -144,28 +134,23 @@ void make_spectral(const fs::path& folder, const Scene& scene, const Environment
 struct Transfer {
   double relative_rmse = 0.0;
   RGB colour_ratio = RGB::Ones();  // mean rendered / mean true over the object, per channel
+};
+
+// A render of a recovered material against the true appearance, over the object's interior.
+Transfer compare(const Image& rendered, const Image& truth, const std::vector<uint8_t>& mask) {
+  RGBd rendered_sum = RGBd::Zero(), truth_sum = RGBd::Zero();
+  for (size_t p = 0; p < mask.size(); ++p)
+    if (mask[p])
+      for (int c = 0; c < 3; ++c) rendered_sum[c] += rendered.pixels[3 * p + c], truth_sum[c] += truth.pixels[3 * p + c];
+  return {image_error(rendered, truth, mask).relative_rmse, (rendered_sum / truth_sum.max(1e-30)).cast<float>()};
+}
+
+// What Figure 7 shows of one transfer.
+struct TransferImages {
+  Transfer numbers;
   Image truth, rendered;
   std::vector<uint8_t> mask;
 };
-
-// `scene` rendered with material (R0, Rd) against the true appearance, view_0, sh integrator.
-Transfer transfer(const Scene& scene, const Environment& environment, const PinholeCamera& camera, float R0, const RGB& Rd,
-                  bool spectral, int lmax) {
-  const RayTracer tracer(scene);
-  const ShIntegratorOptions options{lmax, 2, true, 0, true};
-  Transfer t;
-  t.truth = spectral ? render_sh_spectral(scene, tracer, environment, camera, options, spectral_diffuse_matrix(scene.materials[0].Rd))
-                     : render_sh(scene, tracer, environment, camera, options);
-  t.rendered = render_sh(with_material(scene, R0, Rd), tracer, environment, camera, options);
-  t.mask = interior_mask(tracer, camera);
-  t.relative_rmse = image_error(t.rendered, t.truth, t.mask).relative_rmse;
-  RGBd rendered = RGBd::Zero(), truth = RGBd::Zero();
-  for (size_t p = 0; p < t.mask.size(); ++p)
-    if (t.mask[p])
-      for (int c = 0; c < 3; ++c) rendered[c] += t.rendered.pixels[3 * p + c], truth[c] += t.truth.pixels[3 * p + c];
-  t.colour_ratio = (rendered / truth.max(1e-30)).cast<float>();
-  return t;
-}
 
 // A texture for people: unknown texels (alpha 0) as a magenta and grey checkerboard.
 Image texture_with_unknown(const std::string& path) {
@@ -192,8 +177,8 @@ class Reproduction {
 
   void run() {
     fs::create_directories(s_.out / "figures");
-    results_["settings"] = {{"resolution", s_.resolution}, {"spp", s_.spp}, {"texture_resolution", s_.texture_resolution},
-                            {"lighting_resolution", s_.lighting_resolution},
+    results_["settings"] = {{"resolution", size_text(s_.resolution)}, {"spp", s_.spp}, {"texture_resolution", size_text(s_.texture_resolution)},
+                            {"lighting_resolution", size_text(s_.lighting_resolution)},
                             {"transfer_lmax", s_.transfer_lmax}, {"scenes", s_.scenes.string()}};
     for (const Lighting& l : s_.lightings) {
       results_["lightings"].push_back({{"name", l.name}, {"env", l.env.empty() ? "the scene's" : l.env}});
@@ -202,7 +187,7 @@ class Reproduction {
     transfers();
     figures();
     if (s_.convergence) convergence();
-    write_text_atomically(s_.out / "results.json", results_.dump(2) + "\n");
+    write_text_atomically((s_.out / "results.json").string(), results_.dump(2) + "\n");
     report();
     std::printf("\nwrote %s and %s\n", (s_.out / "report.md").string().c_str(), (s_.out / "results.json").string().c_str());
   }
@@ -218,25 +203,25 @@ class Reproduction {
     for (const std::string object : {"red", "white", "textured"}) {
       const fs::path captures = captures_dir(l, object);
       std::vector<std::string> render = {scene_file(s_, object, l), "--captures", captures.string(), "--holdout",
-                                         "novel_0,novel_1", "--spp", std::to_string(s_.spp), "--res", s_.resolution};
+                                         "novel_0,novel_1", "--spp", std::to_string(s_.spp), "--res", size_text(s_.resolution)};
       if (!l.env.empty()) render.insert(render.end(), {"--env", l.env});
       time("captures/" + l.name + "/" + object, step("captures: " + object + " sphere, " + l.name, command_render, with_threads(render, s_)));
       const std::string transforms = (captures / "transforms.json").string();
       if (object == "textured") {
-        fit(l, object, "texture", {transforms, "--mode", "texture", "--texture-res", s_.texture_resolution});
+        fit(l, object, "texture", {transforms, "--mode", "texture", "--texture-res", size_text(s_.texture_resolution)});
         continue;
       }
       fit(l, object, "material", {transforms, "--mode", "material"});
-      fit(l, object, "lighting", {transforms, "--mode", "lighting", "--env-res", s_.lighting_resolution});
-      fit(l, object, "joint", {transforms, "--mode", "joint", "--env-res", s_.lighting_resolution});
+      fit(l, object, "lighting", {transforms, "--mode", "lighting", "--env-res", size_text(s_.lighting_resolution)});
+      fit(l, object, "joint", {transforms, "--mode", "joint", "--env-res", size_text(s_.lighting_resolution)});
       // The same object seen by a spectral camera (noise-free sh captures, footprint 1).
       const fs::path spectral = captures_dir(l, object + "_spectral");
       std::vector<std::string> sh = {scene_file(s_, object, l), "--captures", spectral.string(), "--integrator", "sh", "--ss",
-                                     "1", "--lmax", "16", "--res", s_.resolution};
+                                     "1", "--lmax", "16", "--res", size_text(s_.resolution)};
       if (!l.env.empty()) sh.insert(sh.end(), {"--env", l.env});
       time("captures/" + l.name + "/" + object + "_spectral", step("spectral captures: " + object + " sphere, " + l.name, command_render, with_threads(sh, s_)));
       const Scene scene = load_scene(scene_file(s_, object, l));
-      make_spectral(spectral, scene, true_environment(scene, l), 16, 1);
+      make_spectral(spectral, scene, environment(l), 16, 1);
       fit(l, object + "_spectral", "material", {(spectral / "transforms.json").string(), "--mode", "material"});
     }
   }
@@ -245,33 +230,61 @@ class Reproduction {
     const fs::path out = fit_dir(l, object, mode);
     args.insert(args.end(), {"--out", out.string()});
     time("fits/" + l.name + "/" + object + "/" + mode, step(mode + " fit: " + object + " sphere, " + l.name, command_invert_fit, args));
-    json result = read_json(out / "fit.json");
-    fits_[l.name][object][mode] = result;
+    fits_[l.name][object][mode] = read_json(out / "fit.json");
+  }
+
+  // The lighting's true environment, as its scenes (or the --env override) define it:
+  // built once (and its SH projections with it), the same for every sphere.
+  const Environment& environment(const Lighting& l) {
+    std::unique_ptr<Environment>& cached = environments_[l.name];
+    if (!cached) {
+      std::vector<std::string> raw;
+      if (!l.env.empty()) raw = {"--env", l.env};
+      const EnvironmentSpec spec = environment_spec(load_scene(scene_file(s_, "red", l)), Arguments(raw, {"env"}));
+      // (Environment does not move: built in place from make_environment's result.)
+      cached.reset(new Environment(make_environment(spec.source, spec.options, spec.width, spec.height)));
+    }
+    return *cached;
   }
 
   const json& fit_of(const Lighting& l, const std::string& object, const std::string& mode) const {
     return fits_.at(l.name).at(object).at(mode);
   }
 
-  // Figure 7's numbers: every material recovered in lighting a, rendered in lighting b.
+  // Figure 7 shows the paper's pair, the first two lightings; results.json has all.
+  bool in_figure_pair(const Lighting& l) const {
+    return l.name == s_.lightings[0].name || (s_.lightings.size() > 1 && l.name == s_.lightings[1].name);
+  }
+
+  // Figure 7's numbers: every material recovered in lighting a, rendered (view_0, sh
+  // integrator) in lighting b against its true appearance there, rendered once per b.
   void transfers() {
+    const ShIntegratorOptions options{s_.transfer_lmax, 2, true, 0, true};
     for (const std::string kind : {"rgb", "spectral"})
       for (const char* object : kHomogeneous)
-        for (const Lighting& a : s_.lightings)
-          for (const Lighting& b : s_.lightings) {
+        for (const Lighting& b : s_.lightings) {
+          const Scene scene = load_scene(scene_file(s_, object, b));
+          const RayTracer tracer(scene);
+          const PinholeCamera camera = scene.make_camera(scene.camera("view_0"), s_.resolution);
+          const Image truth = kind == "spectral" ? render_sh_spectral(scene, tracer, environment(b), camera, options,
+                                                                      spectral_diffuse_matrix(scene.materials[0].Rd))
+                                                 : render_sh(scene, tracer, environment(b), camera, options);
+          const std::vector<uint8_t> mask = interior_mask(tracer, camera);
+          for (const Lighting& a : s_.lightings) {
             // A fit shown in its own lighting: the RGB model's best (kept for the spectral camera only).
             if (a.name == b.name && kind == "rgb") continue;
             const json& recovered = fit_of(a, kind == "rgb" ? object : std::string(object) + "_spectral", "material");
-            const Scene scene = load_scene(scene_file(s_, object, b));
-            const PinholeCamera camera = scene.make_camera(scene.camera("view_0"), resolution());
-            const Transfer t = transfer(scene, true_environment(scene, b), camera, recovered["R0"].get<float>(), rgb_of(recovered["Rd"]),
-                                        kind == "spectral", s_.transfer_lmax);
+            Image rendered = render_sh(with_material(scene, recovered["R0"].get<float>(), rgb_of(recovered["Rd"])), tracer,
+                                       environment(b), camera, options);
+            const Transfer t = compare(rendered, truth, mask);
             results_["transfer"].push_back({{"kind", kind}, {"object", object}, {"fitted_in", a.name}, {"shown_in", b.name},
                                             {"relative_rmse", t.relative_rmse},
                                             {"colour_ratio", {t.colour_ratio[0], t.colour_ratio[1], t.colour_ratio[2]}},
                                             {"Rd", recovered["Rd"]}});
-            transfer_images_[kind + "/" + object + "/" + a.name + "/" + b.name] = t;
+            if (a.name != b.name && in_figure_pair(a) && in_figure_pair(b))
+              transfer_images_[kind + "/" + object + "/" + a.name + "/" + b.name] = {t, truth, std::move(rendered), mask};
           }
+        }
     for (const char* object : kHomogeneous) {
       const Scene scene = load_scene(scene_file(s_, object, s_.lightings.front()));
       const Mat3 M = spectral_diffuse_matrix(scene.materials.at(0).Rd);
@@ -280,8 +293,7 @@ class Reproduction {
     // How neutral each lighting is: the spread of its L00 over the channels (1 = white).
     std::map<std::string, double> spread;
     for (const Lighting& l : s_.lightings) {
-      const Scene scene = load_scene(scene_file(s_, "red", l));
-      const RGBd L00 = true_environment(scene, l).sh(0).values[0];
+      const RGBd L00 = environment(l).sh(0).values[0];
       spread[l.name] = L00.maxCoeff() / std::max(L00.minCoeff(), 1e-30);
       results_["lighting_colour_spread"][l.name] = spread[l.name];
     }
@@ -356,8 +368,6 @@ class Reproduction {
     results_["transfer_summary"] = summary.str();
   }
 
-  std::pair<int, int> resolution() const { return Arguments({"--res", s_.resolution}, {"res"}).resolution("res", {128, 128}); }
-
   void figures() {
     table_2();
     figure_5();
@@ -423,38 +433,36 @@ class Reproduction {
 
   void figure_7() {
     Figure figure{"Figure 7: materials recovered in one lighting, shown in another (view_0, sh integrator)", {}, {}};
-    const Lighting& first = s_.lightings[0];
     for (const std::string kind : {"rgb", "spectral"})
       for (const char* object : kHomogeneous)
         for (const Lighting& a : s_.lightings)
           for (const Lighting& b : s_.lightings) {
-            // The figure shows the paper's pair (the first two lightings); results.json has all.
-            if (a.name == b.name || (a.name != first.name && b.name != first.name) || s_.lightings.size() < 2 ||
-                (a.name != s_.lightings[1].name && b.name != s_.lightings[1].name))
-              continue;
-            const Transfer& t = transfer_images_.at(kind + "/" + object + "/" + a.name + "/" + b.name);
+            if (a.name == b.name || !in_figure_pair(a) || !in_figure_pair(b)) continue;
+            const TransferImages& t = transfer_images_.at(kind + "/" + object + "/" + a.name + "/" + b.name);
             const DisplaySettings display{exposure_for(t.truth), ToneMapping::filmic};
             char ratio[96];
-            std::snprintf(ratio, sizeof ratio, "colour ratio %.3f %.3f %.3f", t.colour_ratio[0], t.colour_ratio[1], t.colour_ratio[2]);
+            std::snprintf(ratio, sizeof ratio, "colour ratio %.3f %.3f %.3f", t.numbers.colour_ratio[0], t.numbers.colour_ratio[1],
+                          t.numbers.colour_ratio[2]);
             figure.row_labels.push_back(std::string(kind == "rgb" ? "RGB captures" : "spectral camera") + "\n" + object +
                                         " sphere\nfitted in " + a.name + "\nshown in " + b.name);
             figure.rows.push_back({picture_panel(t.truth, display, "true appearance in " + b.name),
                                    picture_panel(t.rendered, display, "recovered in " + a.name + "\n" + ratio),
-                                   error_panel(t.rendered, t.truth, t.mask, 0.2f, "|difference| (0 to 20% of mean)\nrelative RMSE " + percent(t.relative_rmse))});
+                                   error_panel(t.rendered, t.truth, t.mask, 0.2f, "|difference| (0 to 20% of mean)\nrelative RMSE " + percent(t.numbers.relative_rmse))});
           }
     write_figure((s_.out / "figures" / "figure7_transfer.png").string(), figure);
   }
 
   void figure_8_and_9() {
     for (const std::string mode : {"lighting", "joint"}) {
-      Figure figure{mode == "lighting" ? "Figure 8: lighting recovered from spheres of known material (" + s_.lighting_resolution + "; coverage: white = seen)"
+      Figure figure{mode == "lighting" ? "Figure 8: lighting recovered from spheres of known material (" + size_text(s_.lighting_resolution) + "; coverage: white = seen)"
                                        : "Figure 9: lighting and material recovered together (joint)",
                     {}, {}};
       for (const Lighting& l : s_.lightings) {
-        const Scene scene = load_scene(scene_file(s_, "red", l));
-        const Environment truth = true_environment(scene, l);
-        const DisplaySettings display{exposure_for(truth.map()) + std::log2(truth.scale()), ToneMapping::filmic};
-        std::vector<FigurePanel> row = {picture_panel(truth.map(), {exposure_for(truth.map()), ToneMapping::filmic}, "true map")};
+        const Environment& truth = environment(l);
+        // map() is before the scale, the recovered maps after it: one exposure for both.
+        const float ev = exposure_for(truth.map());
+        const DisplaySettings display{ev - std::log2(truth.scale()), ToneMapping::filmic};
+        std::vector<FigurePanel> row = {picture_panel(truth.map(), {ev, ToneMapping::filmic}, "true map")};
         for (const char* object : kHomogeneous) {
           const json& r = fit_of(l, object, mode);
           const json& map_error = r["reference_map_error"]["64x32"]["relative_rmse"];
@@ -499,8 +507,8 @@ class Reproduction {
   void convergence() {
     const Lighting office{"office", "office", ""};
     time("convergence", step("error against run time: red sphere, office", command_convergence,
-                             with_threads({scene_file(s_, "red", office), "--camera", "view_0", "--res", s_.convergence_res, "--ref-spp",
-                                           s_.convergence_ref_spp, "--out", (s_.out / "convergence").string()},
+                             with_threads({scene_file(s_, "red", office), "--camera", "view_0", "--res", size_text(s_.convergence_resolution), "--ref-spp",
+                                           std::to_string(s_.convergence_ref_spp), "--out", (s_.out / "convergence").string()},
                                           s_)));
     results_["convergence"] = read_json(s_.out / "convergence" / "summary.json");
   }
@@ -510,14 +518,15 @@ class Reproduction {
   Settings s_;
   json results_;
   std::map<std::string, std::map<std::string, std::map<std::string, json>>> fits_;
-  std::map<std::string, Transfer> transfer_images_;
+  std::map<std::string, TransferImages> transfer_images_;
+  std::map<std::string, std::unique_ptr<Environment>> environments_;
 };
 
 void Reproduction::report() const {
   std::ostringstream md;
   const json& r = results_;
   md << "# glaze reproduce: Nielsen and Brodersen 2004, end to end\n\n"
-     << "Captures: glaze's path tracer, " << s_.resolution << " pixels, " << s_.spp
+     << "Captures: glaze's path tracer, " << size_text(s_.resolution) << " pixels, " << s_.spp
      << " spp, three input views and two held-out views per sphere (scenes/). Lightings:";
   for (const Lighting& l : s_.lightings) md << " " << l.name << (l.env.empty() ? "" : " (" + fs::path(l.env).filename().string() + ")") << ",";
   md.seekp(-1, std::ios_base::end);
@@ -586,7 +595,7 @@ void Reproduction::report() const {
   md << "\nThe paper's Table 3 shows shifts of about 0.02 between known-lighting and joint estimates.\n\n![Figure 9](figures/figure9_joint.png)\n\n";
 
   if (r.contains("convergence")) {
-    md << "## Error against run time (sh integrator against the path tracer)\n\nRed sphere, office, view_0 at " << s_.convergence_res
+    md << "## Error against run time (sh integrator against the path tracer)\n\nRed sphere, office, view_0 at " << size_text(s_.convergence_resolution)
        << ", reference " << s_.convergence_ref_spp << " spp (`glaze convergence`).\n\n";
     for (const auto& [target, entry] : r["convergence"]["time_to"].items()) {
       md << "- relative RMSE " << percent(std::stod(target)) << ": ";
@@ -605,7 +614,7 @@ void Reproduction::report() const {
     total += seconds.get<double>();
   }
   md << "| total | " << fixed(total, 1) << " |\n";
-  write_text_atomically(s_.out / "report.md", md.str());
+  write_text_atomically((s_.out / "report.md").string(), md.str());
 }
 
 // ../shared/data next to the source tree by default; GLAZE_DATA_DIR overrides.
@@ -626,32 +635,26 @@ int command_reproduce(const std::vector<std::string>& raw) {
   s.scenes = args.text("scenes", fs::exists("scenes/red_sphere_office.gltf") ? "scenes" : std::string(GLAZE_SOURCE_DIR) + "/scenes");
   if (!fs::exists(s.scenes / "red_sphere_office.gltf"))
     throw Error(s.scenes.string() + ": no scenes/red_sphere_office.gltf there; give glaze's scenes folder with --scenes DIR");
-  const auto [width, height] = args.resolution("res", quick ? std::pair(160, 160) : std::pair(512, 512));
-  s.resolution = std::to_string(width) + "x" + std::to_string(height);
+  s.resolution = args.resolution("res", quick ? Size(160, 160) : Size(512, 512));
   s.spp = static_cast<int>(args.integer("spp", 256, 1, 1 << 20));
-  const auto [tw, th] = args.resolution("texture-res", quick ? std::pair(64, 32) : std::pair(256, 128));
-  s.texture_resolution = std::to_string(tw) + "x" + std::to_string(th);
-  const auto [lw, lh] = args.resolution("env-res", quick ? std::pair(128, 64) : std::pair(256, 128));
-  s.lighting_resolution = std::to_string(lw) + "x" + std::to_string(lh);
+  s.texture_resolution = args.resolution("texture-res", quick ? Size(64, 32) : Size(256, 128));
+  s.lighting_resolution = args.resolution("env-res", quick ? Size(128, 64) : Size(256, 128));
   if (args.has("threads")) s.threads = std::to_string(args.integer("threads", 0, 1, 1024));
   s.convergence = !args.has("no-convergence");
   // The reference's own noise must stay under half the 1% target: at 65536 spp it is
   // about 0.36% per pixel (2.9% at 1024), whatever the image size; 0.3% needs about
   // 16 times more (`glaze convergence --ref-spp`).
-  s.convergence_res = quick ? "32x32" : "128x128";
-  s.convergence_ref_spp = "65536";
+  s.convergence_resolution = quick ? Size(32, 32) : Size(128, 128);
 
   // Lightings: the paper's two, and real maps when present.
   const std::map<std::string, Lighting> procedural = {{"office", {"office", "office", ""}}, {"blue-room", {"blue-room", "blue_room", ""}}};
   const fs::path envmaps = default_data_dir() / "envmaps";
   std::vector<std::string> names;
   if (args.has("lighting")) {
-    std::stringstream list(args.text("lighting", ""));
-    for (std::string name; std::getline(list, name, ',');) names.push_back(name);
+    names = args.names("lighting");
   } else {
     names = {"office", "blue-room"};
-    std::stringstream list(args.text("real-maps", "st_fagans_interior_1k.hdr,lebombo_1k.hdr"));
-    for (std::string name; std::getline(list, name, ',');) {
+    for (const std::string& name : args.names("real-maps", "st_fagans_interior_1k.hdr,lebombo_1k.hdr")) {
       if (fs::exists(envmaps / name)) names.push_back(name);
       else std::printf("reproduce: %s not found under %s (set GLAZE_DATA_DIR): its experiments are skipped\n", name.c_str(), envmaps.string().c_str());
     }
@@ -663,7 +666,6 @@ int command_reproduce(const std::vector<std::string>& raw) {
     else throw Error("--lighting: '" + name + "' is neither office, blue-room, an image file nor a map under " + envmaps.string());
   }
   if (s.lightings.empty()) throw Error("--lighting: no lighting given");
-  s.transfer_lmax = 16;
   Reproduction(std::move(s)).run();
   return 0;
 }

@@ -1,6 +1,7 @@
 #include "renderer/capture_set.h"
 
 #include "renderer/error.h"
+#include "renderer/text_file.h"
 
 #include <array>
 #include <cmath>
@@ -50,16 +51,7 @@ void write_transforms(const std::string& directory, const CaptureSet& captures) 
   if (!captures.material.is_null()) root["material"] = captures.material;
   if (!captures.renderer.is_null()) root["renderer"] = captures.renderer;
 
-  const std::filesystem::path target = std::filesystem::path(directory) / "transforms.json";
-  const std::filesystem::path temporary = std::filesystem::path(directory) / ".transforms.json.tmp";
-  {
-    std::ofstream out(temporary);
-    out << root.dump(2) << '\n';
-    if (!out) throw Error(target.string() + ": could not be written");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, target, ec);
-  if (ec) throw Error(target.string() + ": could not be written (" + ec.message() + ")");
+  write_text_atomically((std::filesystem::path(directory) / "transforms.json").string(), root.dump(2) + "\n");
 }
 
 // ---------------------------------------------------------------------------------------

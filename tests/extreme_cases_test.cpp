@@ -210,25 +210,35 @@ TEST(ExtremeCases, FivePercentNoiseUnderTheStudioMap) {
   expect_material("nearly black, studio map, 5% noise", fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
 }
 
+// --mode joint on a white (Rd = 1) sphere with coat R0 in the office, noise-free
+// 128x128 captures, three views; prints what it recovered.
+Fit joint_fit_on_white_sphere(const TemporaryDirectory& dir, float R0) {
+  const std::string folder = captures(dir, sphere_scene_file(dir, R0, kWhite), "joint",
+                                      "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1");
+  const Fit fitted = fit(dir, folder, "--mode joint --pixel-footprint 1");
+  const nlohmann::json& result = fitted.result;
+  std::printf("joint, Rd = 1, R0 = %g: R0 %.4f, Rd %.4f %.4f %.4f, lighting scale %.4f %.4f %.4f, L_lm error %.2f%% of L00\n", R0,
+              result["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(), result["Rd"][2].get<double>(),
+              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
+              result["reference_scale"][2].get<double>(), 100 * result["reference_L_lm_error_l2"].get<double>());
+  return fitted;
+}
+
 // (5) --mode joint (material and lighting together) on the Rd = 1, R0 = 0.2 sphere in
 // the office, noise-free, 128x128, three views. The issue asks R0 within 0.001 and Rd
 // within 0.003; that is not met here (nor at 512x512 for the scenes' white sphere, see
 // InvertFitJoint). Measured today: R0 0.1790 (true 0.2), Rd 0.889 0.864 0.909 (true 1),
-// lighting scale 1.08 1.11 1.06, L_lm off by 10.7% of L00, converged, and no warning.
+// lighting scale 1.08 1.11 1.06, L_lm off by 10.7% of L00, converged, and glaze warns
+// that the recovered lighting reproduces the input views only to 15%.
 // (At 256x256: R0 0.1908, Rd 0.953 0.953 0.966, not converged in 100 iterations.)
 // Asserted: finite numbers in the physical range, and the bounds that hold today with
 // some margin (R0 within 0.03, Rd within 0.15, scale within 15%): a regression past
 // them fails.
 TEST(ExtremeCases, JointFitOnRdOneSphereIsFiniteAndBounded) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, sphere_scene_file(dir, 0.2f, kWhite), "joint",
-                                      "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1");
-  const Fit fitted = fit(dir, folder, "--mode joint --pixel-footprint 1");
+  const Fit fitted = joint_fit_on_white_sphere(dir, 0.2f);
   const nlohmann::json& result = fitted.result;
-  std::printf("joint, Rd = 1, R0 = 0.2: R0 %.4f, Rd %.4f %.4f %.4f, lighting scale %.4f %.4f %.4f, L_lm error %.2f%% of L00\n",
-              result["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(), result["Rd"][2].get<double>(),
-              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
-              result["reference_scale"][2].get<double>(), 100 * result["reference_L_lm_error_l2"].get<double>());
+  EXPECT_NE(fitted.err.find("reproduces the input views"), std::string::npos) << fitted.err;
   EXPECT_EQ(result["mode"], "joint");
   EXPECT_EQ(result["L_lm"].size(), 25u);
   EXPECT_NEAR(result["R0"].get<double>(), 0.2, 0.03);
@@ -241,20 +251,16 @@ TEST(ExtremeCases, JointFitOnRdOneSphereIsFiniteAndBounded) {
 
 // --mode joint on the matte extreme: Rd = 1, R0 = 0 (the mirror carries 3% of the
 // light). Measured today (128x128, three views): R0 0 (true 0), Rd 0.9999 1.0000 0.8821
-// (true 1), lighting scale 1.0004 1.0003 1.1327, L_lm off by 13.3% of L00, and the
-// high-resolution map's relative RMSE about 1e8 (its values divided by a Fresnel factor
-// near 0); glaze warns that the object is matte-like and the map unreliable. Asserted:
+// (true 1), lighting scale 1.0004 1.0003 1.1327, L_lm off by 13.3% of L00; the
+// high-resolution map keeps the SH reconstruction everywhere (no texel gets enough
+// mirror weight: (o - diffuse) / F would be noise divided by a Fresnel factor near 0,
+// a relative RMSE of about 1e8 before that check); glaze warns that the object is
+// matte-like and the map unreliable. Asserted:
 // finite numbers, that warning, R0 within 0.001, Rd and the scale within 0.2.
 TEST(ExtremeCases, JointFitOnMatteRdOneSphereWarns) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, sphere_scene_file(dir, 0.0f, kWhite), "joint",
-                                      "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1");
-  const Fit fitted = fit(dir, folder, "--mode joint --pixel-footprint 1");
+  const Fit fitted = joint_fit_on_white_sphere(dir, 0.0f);
   const nlohmann::json& result = fitted.result;
-  std::printf("joint, Rd = 1, R0 = 0: R0 %.4f, Rd %.4f %.4f %.4f, lighting scale %.4f %.4f %.4f, L_lm error %.2f%% of L00\n",
-              result["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(), result["Rd"][2].get<double>(),
-              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
-              result["reference_scale"][2].get<double>(), 100 * result["reference_L_lm_error_l2"].get<double>());
   EXPECT_NE(fitted.err.find("matte-like"), std::string::npos) << fitted.err;
   EXPECT_NEAR(result["R0"].get<double>(), 0.0, 0.001);
   EXPECT_GE(result["R0"].get<double>(), 0.0);
