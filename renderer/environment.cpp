@@ -56,34 +56,11 @@ Vec3 Environment::uv_to_direction(const Vec2& uv) const {
   return local_to_world_ * latlong_to_direction(uv);
 }
 
-EnvironmentLookup Environment::locate(const Vec3& w) const {
-  const Vec3 d = local_to_world_.transpose() * w;
-  EnvironmentLookup at;
-  at.uv = direction_to_latlong(d, &at.sin_theta);
-  const float x = at.uv.x() * map_.width - 0.5f, y = at.uv.y() * map_.height - 0.5f;
-  const float x_floor = std::floor(x), y_floor = std::floor(y);
-  at.fx = x - x_floor;
-  at.fy = y - y_floor;
-  const int width = map_.width, height = map_.height;
-  at.x0 = static_cast<int>(x_floor);  // in [-1, width - 1]: u is in [0, 1)
-  if (at.x0 < 0) at.x0 += width;
-  at.x1 = at.x0 + 1 == width ? 0 : at.x0 + 1;
-  at.y0 = std::clamp(static_cast<int>(y_floor), 0, height - 1);
-  at.y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, height - 1);
-  return at;
-}
-
 void Environment::prefetch(const EnvironmentLookup& at, bool density) const {
   const float* texels = map_.pixels.data();
-  for (int y : {at.y0, at.y1})
-    for (int x : {at.x0, at.x1}) __builtin_prefetch(texels + (size_t(y) * map_.width + x) * 3);
+  // One line per row of the footprint: x0 and x1 share it but for one texel in 5.
+  for (int y : {at.y0, at.y1}) __builtin_prefetch(texels + (size_t(y) * map_.width + at.x0) * 3);
   if (density) sampling().distribution.prefetch(at.uv);
-}
-
-RGB Environment::eval(const EnvironmentLookup& at) const {
-  const RGB top = (1.0f - at.fx) * map_.at(at.x0, at.y0) + at.fx * map_.at(at.x1, at.y0);
-  const RGB bottom = (1.0f - at.fx) * map_.at(at.x0, at.y1) + at.fx * map_.at(at.x1, at.y1);
-  return scale_ * ((1.0f - at.fy) * top + at.fy * bottom);
 }
 
 namespace {
@@ -156,15 +133,19 @@ void Environment::sample(std::span<const Vec2> u, std::span<EnvironmentSample> o
   constexpr size_t kChunk = 16;
   for (size_t first = 0; first < u.size(); first += kChunk) {
     const size_t n = std::min(kChunk, u.size() - first);
-    std::array<int, kChunk> row;
+    std::array<int, kChunk> row, start;
     std::array<float, kChunk> y, pdf_row;
     for (size_t k = 0; k < n; ++k) {
       y[k] = distribution.sample_row(u[first + k].y(), &pdf_row[k], &row[k]);
-      distribution.prefetch_in_row(row[k], u[first + k].x());
+      distribution.row(row[k]).prefetch_guide(u[first + k].x());
+    }
+    for (size_t k = 0; k < n; ++k) {
+      start[k] = distribution.row(row[k]).search_start(u[first + k].x());
+      distribution.row(row[k]).prefetch_bin(start[k]);
     }
     for (size_t k = 0; k < n; ++k) {
       float pdf_column = 0.0f;
-      const float x = distribution.sample_in_row(row[k], u[first + k].x(), &pdf_column);
+      const float x = distribution.row(row[k]).sample_from(u[first + k].x(), start[k], &pdf_column, nullptr);
       out[first + k] = sample_at(Vec2(x, y[k]), pdf_row[k] * pdf_column);
     }
   }

@@ -9,6 +9,8 @@
 #pragma once
 
 #include "renderer/image.h"
+#include "renderer/lanes.h"
+#include "renderer/latlong.h"
 #include "renderer/math.h"
 #include "renderer/sampling.h"
 #include "renderer/sh.h"
@@ -57,9 +59,29 @@ class Environment {
 
   // Radiance arriving from world direction w (scale included).
   RGB eval(const Vec3& w) const { return eval(locate(w)); }
-  RGB eval(const EnvironmentLookup& at) const;
+  RGB eval(const EnvironmentLookup& at) const {
+    const RGB top = (1.0f - at.fx) * map_.at(at.x0, at.y0) + at.fx * map_.at(at.x1, at.y0);
+    const RGB bottom = (1.0f - at.fx) * map_.at(at.x0, at.y1) + at.fx * map_.at(at.x1, at.y1);
+    return scale_ * ((1.0f - at.fy) * top + at.fy * bottom);
+  }
 
-  EnvironmentLookup locate(const Vec3& w) const;
+  // Inline and free of branches, so that a loop locating many directions vectorises.
+  EnvironmentLookup locate(const Vec3& w) const {
+    const Vec3 d = local_to_world_.transpose() * w;
+    EnvironmentLookup at;
+    at.uv = direction_to_latlong(d, &at.sin_theta);
+    const float x = at.uv.x() * map_.width - 0.5f, y = at.uv.y() * map_.height - 0.5f;
+    const float x_floor = std::floor(x), y_floor = std::floor(y);
+    at.fx = x - x_floor;
+    at.fy = y - y_floor;
+    const int width = map_.width, height = map_.height;
+    at.x0 = static_cast<int>(x_floor);  // in [-1, width - 1]: u is in [0, 1)
+    at.x0 = at.x0 < 0 ? at.x0 + width : at.x0;
+    at.x1 = at.x0 + 1 == width ? 0 : at.x0 + 1;
+    at.y0 = std::clamp(static_cast<int>(y_floor), 0, height - 1);
+    at.y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, height - 1);
+    return at;
+  }
   // Asks the memory system for the texels eval(at) reads (and, with `density`, the
   // sampling density pdf(at) reads) without waiting for them.
   void prefetch(const EnvironmentLookup& at, bool density) const;
@@ -106,6 +128,37 @@ class Environment {
   mutable std::unique_ptr<Sampling> sampling_;
   mutable std::mutex sh_mutex_;
   mutable std::map<int, ShCoefficients> sh_cache_;
+};
+
+// Environment::locate of 16 directions, as structure of arrays (lanes.h).
+struct EnvironmentLookups {
+  alignas(64) int x0[kLanes];
+  alignas(64) int x1[kLanes];
+  alignas(64) int y0[kLanes];
+  alignas(64) int y1[kLanes];
+  alignas(64) float fx[kLanes];
+  alignas(64) float fy[kLanes];
+  alignas(64) float u[kLanes];
+  alignas(64) float v[kLanes];
+  alignas(64) float sin_theta[kLanes];
+
+  void locate(const Environment& environment, const Directions& d) {
+    for (int k = 0; k < kLanes; ++k) {
+      const EnvironmentLookup at = environment.locate(Vec3(d.x[k], d.y[k], d.z[k]));
+      x0[k] = at.x0;
+      x1[k] = at.x1;
+      y0[k] = at.y0;
+      y1[k] = at.y1;
+      fx[k] = at.fx;
+      fy[k] = at.fy;
+      u[k] = at.uv.x();
+      v[k] = at.uv.y();
+      sin_theta[k] = at.sin_theta;
+    }
+  }
+  EnvironmentLookup operator[](int k) const {
+    return {x0[k], x1[k], y0[k], y1[k], fx[k], fy[k], Vec2(u[k], v[k]), sin_theta[k]};
+  }
 };
 
 // Parses an environment specification "procedural:NAME" or a file path and builds it;

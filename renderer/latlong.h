@@ -19,13 +19,14 @@ inline Vec3 latlong_to_direction(const Vec2& uv, float* sin_theta_out = nullptr)
 
 // d need not be normalised. theta comes from atan2, which keeps full relative precision
 // near the poles where acos(d.y) loses it (that matters to sampling densities there).
-// Also gives sin(theta) if asked, accurate near the poles too.
+// Also gives sin(theta) if asked, accurate near the poles too. Free of branches and of
+// Eigen's SSE scalar square root, so that loops over many directions vectorise.
 inline Vec2 direction_to_latlong(const Vec3& d, float* sin_theta_out = nullptr) {
   float u = fast_atan2(d.x(), -d.z()) * (0.5f / kPi);
   if (u < 0.0f) u += 1.0f;
   if (u >= 1.0f) u = 0.0f;  // u = -0 rounds onto 1
   const float rho = std::sqrt(d.x() * d.x() + d.z() * d.z());
-  if (sin_theta_out) *sin_theta_out = rho / d.norm();
+  if (sin_theta_out) *sin_theta_out = rho / std::sqrt(rho * rho + d.y() * d.y());  // not d.norm(): see below
   const float v = fast_atan2(rho, d.y()) / kPi;
   return {u, std::min(v, 1.0f)};
 }

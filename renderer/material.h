@@ -21,6 +21,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <string_view>
 
 namespace glaze {
@@ -121,7 +122,21 @@ class PolishedMaterial {
 
 // Density of the diffuse-lobe sampling alone, g(mu) mu / (20 pi / 21) on the upper
 // hemisphere, and the routine that draws from it (next to each other, pbrt-style).
-float diffuse_lobe_pdf(float cos_theta);
+inline float diffuse_lobe_pdf(float cos_theta) {
+  return cos_theta > 0.0f ? static_cast<float>(kDiffuseNormalisation) * coat_transmittance_g(cos_theta) * cos_theta
+                          : 0.0f;
+}
 Vec3 sample_diffuse_lobe(const Vec2& u);
+// sample_diffuse_lobe() in two steps: cos(theta) = C^-1(u.x) for the lobe's CDF C (by
+// Newton's method; for many u at once, SIMD lanes that agree with the one-at-a-time
+// solver to double precision), then the direction at azimuth 2 pi u.y.
+float diffuse_lobe_cos_theta(float u);
+void diffuse_lobe_cos_theta(std::span<const float> u, std::span<float> cos_theta);
+inline Vec3 diffuse_lobe_direction(float cos_theta, float u_azimuth) {
+  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+  float sin_phi, cos_phi;
+  sin_cos_turns(u_azimuth, &sin_phi, &cos_phi);
+  return {sin_theta * cos_phi, sin_theta * sin_phi, cos_theta};
+}
 
 }  // namespace glaze

@@ -11,9 +11,8 @@
 // can occlude the environment, so no shadow rays or further intersections are traced.
 // There the mirror term F(n.v) L(r) is evaluated exactly instead of being chosen at
 // random against the diffuse lobe (splitting: its noise vanishes), and the diffuse lobe
-// is always sampled. That estimator runs over a batch of camera rays stage by stage,
-// prefetching the environment texels each stage will read, so that the cache misses of
-// looking up a large map overlap instead of queueing one after another.
+// is always sampled. That estimator (convex_direct_light.cpp) runs 16 camera rays at a
+// time, stage by stage, in SIMD lanes.
 #pragma once
 
 #include "renderer/environment.h"
@@ -54,8 +53,14 @@ class PathTracer {
   RGB trace_path(const Ray& ray, Pcg32& rng) const;
   void convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB* out) const;
   // MIS weights of the two strategies for the diffuse lobe's direct light.
-  float light_sample_weight(float light_pdf, float bsdf_pdf) const;
-  float escape_weight(bool after_delta, float bsdf_pdf, float light_pdf) const;
+  float light_sample_weight(float light_pdf, float bsdf_pdf) const {
+    return options_.estimator == DirectLightEstimator::mis ? power_heuristic(light_pdf, bsdf_pdf) : 1.0f;
+  }
+  float escape_weight(bool after_delta, float bsdf_pdf, float light_pdf) const {
+    if (after_delta || options_.estimator == DirectLightEstimator::bsdf) return 1.0f;
+    if (options_.estimator == DirectLightEstimator::environment) return 0.0f;
+    return power_heuristic(bsdf_pdf, light_pdf);
+  }
 
   const Scene& scene_;
   const RayTracer& tracer_;

@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 #include "renderer/latlong.h"
+#include "renderer/sphere_intersection.h"
 
 #include <cmath>
 #include <string>
@@ -12,23 +13,6 @@ namespace {
 void check_device(RTCDevice device, const char* what) {
   const RTCError error = rtcGetDeviceError(device);
   if (error != RTC_ERROR_NONE) throw Error(std::string("Embree failed to ") + what + " (error " + std::to_string(int(error)) + ")");
-}
-
-// Nearest root t > t_min of |o + t d - c| = r, in double; NaN if none.
-double intersect_sphere(const Sphere& sphere, const Vec3& origin, const Vec3& direction, double t_min, double t_max) {
-  const Vec3d oc = (origin - sphere.center).cast<double>();
-  const Vec3d d = direction.cast<double>();
-  const double a = d.squaredNorm(), half_b = oc.dot(d);
-  const double c = oc.squaredNorm() - double(sphere.radius) * sphere.radius;
-  const double discriminant = half_b * half_b - a * c;
-  if (discriminant < 0.0) return std::nan("");
-  // Numerically stable roots (no cancellation between -b and sqrt(disc)).
-  const double q = -(half_b + std::copysign(std::sqrt(discriminant), half_b));
-  double t0 = q / a, t1 = q != 0.0 ? c / q : t0;
-  if (t0 > t1) std::swap(t0, t1);
-  if (t0 > t_min && t0 < t_max) return t0;
-  if (t1 > t_min && t1 < t_max) return t1;
-  return std::nan("");
 }
 
 // The outward normal, unnormalised, at distance t along the ray: p - c, in double.
@@ -51,7 +35,7 @@ void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
   auto* rayhit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1 only
   RTCRay& ray = rayhit->ray;
   const Vec3 origin(ray.org_x, ray.org_y, ray.org_z), direction(ray.dir_x, ray.dir_y, ray.dir_z);
-  const double t = intersect_sphere(s, origin, direction, ray.tnear, ray.tfar);
+  const double t = sphere_hit_distance(origin, direction, s.center, s.radius, ray.tnear, ray.tfar);
   if (std::isnan(t)) return;
   ray.tfar = static_cast<float>(t);
   const Vec3 n = sphere_hit_normal(s, origin, direction, t);
@@ -69,7 +53,7 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
   const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
   auto* ray = reinterpret_cast<RTCRay*>(args->ray);
   const Vec3 origin(ray->org_x, ray->org_y, ray->org_z), direction(ray->dir_x, ray->dir_y, ray->dir_z);
-  if (!std::isnan(intersect_sphere((*spheres)[args->primID], origin, direction, ray->tnear, ray->tfar)))
+  if (!std::isnan(sphere_hit_distance(origin, direction, (*spheres)[args->primID].center, (*spheres)[args->primID].radius, ray->tnear, ray->tfar)))
     ray->tfar = -std::numeric_limits<float>::infinity();
 }
 
@@ -126,7 +110,7 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
   float u = 0.0f, v = 0.0f;
   if (lone_sphere_) {
     const Sphere& sphere = scene_.spheres.front();
-    const double t = intersect_sphere(sphere, ray.origin, ray.direction, 0.0, max_distance);
+    const double t = sphere_hit_distance(ray.origin, ray.direction, sphere.center, sphere.radius, 0.0, max_distance);
     if (std::isnan(t)) return std::nullopt;
     distance = static_cast<float>(t);
     geometry = sphere_geometry_;
@@ -185,8 +169,53 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
   return hit;
 }
 
+void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool texture_coordinates) const {
+  if (!lone_sphere_) {
+    for (int k = 0; k < kLanes; ++k) {
+      const std::optional<SurfaceHit> hit =
+          intersect(rays[std::min(k, count - 1)], std::numeric_limits<float>::infinity(), texture_coordinates);
+      out.hit[k] = hit ? 1 : 0;
+      out.normal.set(k, hit ? hit->normal : Vec3::UnitZ());
+      out.material[k] = hit ? hit->material : 0;
+      out.uv[k] = hit ? hit->uv : Vec2::Zero();
+    }
+    return;
+  }
+  const Sphere& sphere = scene_.spheres.front();
+  Directions view;
+  alignas(64) double origin_x[kLanes], origin_y[kLanes], origin_z[kLanes];  // relative to the centre
+  alignas(64) float facing[kLanes];  // -1 where the normal was turned to face the ray
+  for (int k = 0; k < kLanes; ++k) {
+    const Ray& ray = rays[std::min(k, count - 1)];
+    view.set(k, ray.direction);
+    origin_x[k] = double(ray.origin.x()) - sphere.center.x();
+    origin_y[k] = double(ray.origin.y()) - sphere.center.y();
+    origin_z[k] = double(ray.origin.z()) - sphere.center.z();
+  }
+  // SIMD: the root, then the unit normal p - c (double, then float, as above), turned
+  // to face the viewer.
+  for (int k = 0; k < kLanes; ++k) {
+    const double t = sphere_hit_distance(origin_x[k], origin_y[k], origin_z[k], view.x[k], view.y[k], view.z[k],
+                                         sphere.radius, 0.0, std::numeric_limits<double>::infinity());
+    out.hit[k] = t == t ? 1 : 0;
+    const double s = t == t ? t : 0.0;
+    const float px = float(origin_x[k] + s * view.x[k]), py = float(origin_y[k] + s * view.y[k]),
+                pz = float(origin_z[k] + s * view.z[k]);
+    const float length = std::sqrt(px * px + py * py + pz * pz);
+    facing[k] = px * view.x[k] + py * view.y[k] + pz * view.z[k] > 0.0f ? -1.0f : 1.0f;
+    const float scale = length > 0.0f ? facing[k] / length : 0.0f;
+    out.normal.x[k] = px * scale;
+    out.normal.y[k] = py * scale;
+    out.normal.z[k] = pz * scale;
+    out.material[k] = sphere.material;
+  }
+  for (int k = 0; k < kLanes; ++k)  // of the outward normal, whichever way it was turned
+    out.uv[k] = texture_coordinates ? direction_to_latlong(sphere.rotation.transpose() * (facing[k] * out.normal[k]))
+                                    : Vec2::Zero();
+}
+
 bool RayTracer::occluded(const Ray& ray, float max_distance) const {
-  if (lone_sphere_) return !std::isnan(intersect_sphere(scene_.spheres.front(), ray.origin, ray.direction, 0.0, max_distance));
+  if (lone_sphere_) return !std::isnan(sphere_hit_distance(ray.origin, ray.direction, scene_.spheres.front().center, scene_.spheres.front().radius, 0.0, max_distance));
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r{};

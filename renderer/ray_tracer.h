@@ -9,6 +9,7 @@
 #pragma once
 
 #include "renderer/camera.h"
+#include "renderer/lanes.h"
 #include "renderer/scene.h"
 
 #include <embree3/rtcore.h>
@@ -28,6 +29,16 @@ struct SurfaceHit {
   int material;
 };
 
+// The hits of up to 16 rays (lanes.h), for callers that shade under distant light and
+// need only the surface's orientation: where hit[k] is 0 the other fields are finite
+// but meaningless.
+struct SurfaceHits {
+  Directions normal;               // shading normal, unit, facing the ray's origin side
+  alignas(64) int hit[kLanes];     // 1 where the ray hit (an int, to vectorise with floats)
+  int material[kLanes];
+  Vec2 uv[kLanes];                 // texture coordinate, if asked for (else 0, 0)
+};
+
 class RayTracer {
  public:
   explicit RayTracer(const Scene& scene);
@@ -39,6 +50,10 @@ class RayTracer {
   // arc tangents, which callers that only need the geometry skip.
   std::optional<SurfaceHit> intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity(),
                                       bool texture_coordinates = true) const;
+  // The same for rays[0..count), count <= kLanes; unused lanes repeat the last ray. A
+  // lone sphere is intersected in SIMD lanes (the same root as above), anything else
+  // one ray at a time.
+  void intersect(const Ray* rays, int count, SurfaceHits& out, bool texture_coordinates) const;
   // True if anything lies along the ray closer than max_distance.
   bool occluded(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const;
 

@@ -38,11 +38,11 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
   }
 }
 
-float Distribution1D::sample(float u, float* pdf, int* bin) const {
+float Distribution1D::sample_from(float u, int start, float* pdf, int* bin) const {
   const int n = size();
   // The bin i with cdf_i <= u < cdf_i+1 (so of non-zero width): start from the guide
   // entry, at or before it, and walk forward.
-  int i = bins_[std::clamp(static_cast<int>(u * n), 0, n - 1)].guide;
+  int i = start;
   while (i < n - 1 && bins_[i + 1].cdf <= u) ++i;
   while (i > 0 && bins_[i].cdf > u) --i;        // u * n may round up onto the next guide entry
   while (i > 0 && bins_[i].pdf == 0.0f) --i;    // only reachable for u rounding onto 1
@@ -74,17 +74,22 @@ Distribution2D::Distribution2D(std::span<const float> weights, int width, int he
       }()) {
   rows_.reserve(height);
   for (int y = 0; y < height; ++y) rows_.emplace_back(weights.subspan(size_t(y) * width, width));
+  density_.resize(size_t(width) * height);
+  for (int y = 0; y < height; ++y) {
+    const float row_density = marginal_.pdf((y + 0.5f) / height);
+    for (int x = 0; x < width; ++x) density_[size_t(y) * width + x] = row_density * rows_[y].pdf((x + 0.5f) / width);
+  }
 }
 
 Vec2 Distribution2D::sample(const Vec2& u, float* pdf) const {
   float pdf_row = 0.0f, pdf_column = 0.0f;
   int row = 0;
   const float y = sample_row(u.y(), &pdf_row, &row);
-  const float x = sample_in_row(row, u.x(), &pdf_column);
+  const float x = rows_[row].sample(u.x(), &pdf_column, nullptr);
   if (pdf) *pdf = pdf_row * pdf_column;
   return {x, y};
 }
 
-float Distribution2D::pdf(const Vec2& p) const { return marginal_.pdf(p.y()) * rows_[row_of(p.y())].pdf(p.x()); }
+float Distribution2D::pdf(const Vec2& p) const { return density_[cell_of(p)]; }
 
 }  // namespace glaze

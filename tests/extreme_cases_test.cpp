@@ -250,13 +250,15 @@ TEST(ExtremeCases, JointFitOnRdOneSphereIsFiniteAndBounded) {
 }
 
 // --mode joint on the matte extreme: Rd = 1, R0 = 0 (the mirror carries 3% of the
-// light). Measured today (128x128, three views): R0 0 (true 0), Rd 0.9999 1.0000 0.8821
-// (true 1), lighting scale 1.0004 1.0003 1.1327, L_lm off by 13.3% of L00; the
-// high-resolution map keeps the SH reconstruction everywhere (no texel gets enough
-// mirror weight: (o - diffuse) / F would be noise divided by a Fresnel factor near 0,
-// a relative RMSE of about 1e8 before that check); glaze warns that the object is
-// matte-like and the map unreliable. Asserted:
-// finite numbers, that warning, R0 within 0.001, Rd and the scale within 0.2.
+// light, all of it at grazing angles). There the split of each channel between Rd and
+// the lighting's scale is ill-conditioned: only the product Rd x scale is pinned by the
+// diffuse light. Captures that differ by float rounding (1e-7 RMS, from a reordering of
+// the sh integrator's sums) moved the fit from Rd 0.9999 1.0000 0.8821, scale 1.0004
+// 1.0003 1.1327 to Rd 0.7037 0.3823 0.3501, scale 1.4157 2.5642 2.7913: products 0.98-1.00
+// both times. glaze warns that the object is matte-like and the map unreliable, and the
+// high-resolution map keeps the SH reconstruction everywhere (no texel gets enough mirror
+// weight). Asserted: finite numbers, that warning, R0 within 0.001, Rd in range, and the
+// identifiable product within 3% of 1.
 TEST(ExtremeCases, JointFitOnMatteRdOneSphereWarns) {
   TemporaryDirectory dir;
   const Fit fitted = joint_fit_on_white_sphere(dir, 0.0f);
@@ -265,9 +267,10 @@ TEST(ExtremeCases, JointFitOnMatteRdOneSphereWarns) {
   EXPECT_NEAR(result["R0"].get<double>(), 0.0, 0.001);
   EXPECT_GE(result["R0"].get<double>(), 0.0);
   for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), 1.0, 0.2) << "channel " << c;
-    EXPECT_LE(result["Rd"][c].get<double>(), 1.0) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.2) << "channel " << c;
+    const double Rd = result["Rd"][c].get<double>(), scale = result["reference_scale"][c].get<double>();
+    EXPECT_GE(Rd, 0.0) << "channel " << c;
+    EXPECT_LE(Rd, 1.0) << "channel " << c;
+    EXPECT_NEAR(Rd * scale, 1.0, 0.03) << "channel " << c;
   }
 }
 

@@ -692,6 +692,39 @@ TEST(RayTracer, SphereHitFromInsideHasNormalFacingTheRay) {
   expect_vec_near(off->normal, Vec3(-0.5f, -y, 0), 1e-6f, "normal");
 }
 
+// The batched intersection (SIMD lanes for a lone sphere) agrees with the one-ray
+// intersection: hit or miss, normal facing the ray, texture coordinates of the outward
+// normal in the sphere's own frame; for rays from outside, inside and grazing the
+// silhouette, and for a batch shorter than the lanes.
+TEST(RayTracer, BatchedSphereHitsMatchOneRayAtATime) {
+  Scene scene = unit_sphere_scene();
+  scene.spheres.front().center = Vec3(0.2f, -0.1f, 0.3f);
+  scene.spheres.front().rotation = Eigen::AngleAxisf(0.7f, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const RayTracer tracer(scene);
+  Pcg32 rng(5);
+  for (int batch = 0; batch < 200; ++batch) {
+    const int count = batch % 2 ? kLanes : 1 + batch % kLanes;
+    std::array<Ray, kLanes> rays;
+    for (int k = 0; k < count; ++k) {
+      const Vec3 origin = batch % 3 == 0 ? Vec3(0.2f, -0.1f, 0.3f) + 0.5f * Vec3(rng.next_float(), rng.next_float(), rng.next_float())
+                                         : Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, 4.0f);
+      const Vec3 target = Vec3(0.2f, -0.1f, 0.3f) + 2.2f * Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
+      rays[k] = {origin, (target - origin).normalized()};
+    }
+    SurfaceHits hits;
+    tracer.intersect(rays.data(), count, hits, true);
+    for (int k = 0; k < count; ++k) {
+      const auto one = tracer.intersect(rays[k]);
+      ASSERT_EQ(hits.hit[k] != 0, one.has_value()) << "batch " << batch << " lane " << k;
+      if (!one) continue;
+      expect_vec_near(hits.normal[k], one->normal, 1e-6f, "normal");
+      EXPECT_EQ(hits.material[k], one->material);
+      EXPECT_NEAR(hits.uv[k].x(), one->uv.x(), 1e-6f);
+      EXPECT_NEAR(hits.uv[k].y(), one->uv.y(), 1e-6f);
+    }
+  }
+}
+
 // A ray passing 1e-3 outside the silhouette misses; one passing 1e-3 inside hits, at
 // z = sqrt(1 - 0.999^2) = 0.0447102.
 TEST(RayTracer, GrazingRaysMissOutsideAndHitInside) {
