@@ -115,6 +115,7 @@ options of `reproduce`:
                       maps, a small convergence study): minutes, not the full hour
   --env-res WxH       maps recovered by the lighting and joint fits (default 256x128)
   --res WxH, --spp N  captures (default 512x512, 256 spp)
+  --seed S            of the captures' path tracer (default 0)
   --texture-res WxH   textures of the textured sphere (default 256x128)
   --lighting L,...    office, blue-room, map files or names under
                       $GLAZE_DATA_DIR/envmaps (default: office, blue-room and

@@ -37,6 +37,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -64,6 +65,7 @@ struct Settings {
   fs::path out, scenes;
   Size resolution, texture_resolution, lighting_resolution;
   int spp = 256;
+  std::string seed = "0";  // of the captures' path tracer
   int transfer_lmax = 16;
   std::vector<Lighting> lightings;
   std::string threads;  // empty: all cores
@@ -203,7 +205,8 @@ class Reproduction {
     for (const std::string object : {"red", "white", "textured"}) {
       const fs::path captures = captures_dir(l, object);
       std::vector<std::string> render = {scene_file(s_, object, l), "--captures", captures.string(), "--holdout",
-                                         "novel_0,novel_1", "--spp", std::to_string(s_.spp), "--res", size_text(s_.resolution)};
+                                         "novel_0,novel_1", "--spp", std::to_string(s_.spp), "--seed", s_.seed,
+                                         "--res", size_text(s_.resolution)};
       if (!l.env.empty()) render.insert(render.end(), {"--env", l.env});
       time("captures/" + l.name + "/" + object, step("captures: " + object + " sphere, " + l.name, command_render, with_threads(render, s_)));
       const std::string transforms = (captures / "transforms.json").string();
@@ -626,7 +629,7 @@ fs::path default_data_dir() {
 }  // namespace
 
 int command_reproduce(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"out", "res", "spp", "texture-res", "env-res", "lighting", "real-maps", "scenes", "threads"}, {"quick", "no-convergence"});
+  const Arguments args(raw, {"out", "res", "spp", "seed", "texture-res", "env-res", "lighting", "real-maps", "scenes", "threads"}, {"quick", "no-convergence"});
   if (!args.positionals().empty()) throw Error("usage: glaze reproduce --out DIR [--quick] (see `glaze help`)");
   if (!args.has("out")) throw Error("glaze reproduce needs --out DIR (where the captures, fits, figures and report go)");
   const bool quick = args.has("quick");
@@ -637,6 +640,7 @@ int command_reproduce(const std::vector<std::string>& raw) {
     throw Error(s.scenes.string() + ": no scenes/red_sphere_office.gltf there; give glaze's scenes folder with --scenes DIR");
   s.resolution = args.resolution("res", quick ? Size(160, 160) : Size(512, 512));
   s.spp = static_cast<int>(args.integer("spp", 256, 1, 1 << 20));
+  s.seed = std::to_string(args.integer("seed", 0, 0, std::numeric_limits<long>::max()));
   s.texture_resolution = args.resolution("texture-res", quick ? Size(64, 32) : Size(256, 128));
   s.lighting_resolution = args.resolution("env-res", quick ? Size(128, 64) : Size(256, 128));
   if (args.has("threads")) s.threads = std::to_string(args.integer("threads", 0, 1, 1024));

@@ -37,7 +37,6 @@ void PathTracer::convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB
   Directions view, mirror, lobe, light;
   alignas(64) float mu_o[kLanes], mirror_weight[kLanes], light_weight[kLanes], lobe_weight[kLanes];
   alignas(64) float light_pdf[kLanes], lobe_density[kLanes], lobe_light_pdf[kLanes];
-  std::array<Vec2, kLanes> light_u;
   alignas(64) float lobe_u_theta[kLanes], lobe_u_phi[kLanes], lobe_cos_theta[kLanes];
   std::array<EnvironmentSample, kLanes> light_samples;
   std::array<RGB, kLanes> Rd;
@@ -45,28 +44,19 @@ void PathTracer::convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB
 
   for (int first = 0; first < count; first += kLanes) {
     const int n = std::min(kLanes, count - first);
-    // 1. The camera rays' hits (SIMD for a lone sphere: RayTracer) and their random
-    // numbers: two per sample for the environment's direction, then two per hit for the
-    // lobe's (the order glaze has always drawn them in, so a seed keeps its image).
+    // 1. The camera rays' hits (SIMD for a lone sphere: RayTracer), the environment's
+    // samples (their table reads interleaved) and two numbers per hit for the lobe.
     tracer_.intersect(rays + first, n, hits, textured);
-    for (int k = 0; k < kLanes; ++k) light_u[k] = k < n ? Vec2(rng.next_float(), rng.next_float()) : Vec2(0.5f, 0.5f);
+    if (use_environment_samples) environment_.sample(rng, std::span(light_samples.data(), n));
     for (int k = 0; k < kLanes; ++k) {
       const Vec2 u = k < n && hit[k] ? Vec2(rng.next_float(), rng.next_float()) : Vec2(0.5f, 0.5f);
       lobe_u_theta[k] = u.x();
       lobe_u_phi[k] = u.y();
     }
-    // 2. Environment samples: the density's tables are read here, interleaved.
-    if (use_environment_samples) {
-      environment_.sample(light_u, light_samples);
-      for (int k = 0; k < kLanes; ++k) {
-        light.set(k, light_samples[k].direction);
-        light_pdf[k] = light_samples[k].pdf;
-      }
-    } else {
-      for (int k = 0; k < kLanes; ++k) {
-        light.set(k, Vec3::UnitZ());
-        light_pdf[k] = 0.0f;
-      }
+    for (int k = 0; k < kLanes; ++k) {
+      const bool drawn = use_environment_samples && k < n;
+      light.set(k, drawn ? light_samples[k].direction : Vec3::UnitZ());
+      light_pdf[k] = drawn ? light_samples[k].pdf : 0.0f;
     }
 
     // 3. SIMD: the cosine to the viewer and the mirror direction.

@@ -60,7 +60,7 @@ void Environment::prefetch(const EnvironmentLookup& at, bool density) const {
   const float* texels = map_.pixels.data();
   // One line per row of the footprint: x0 and x1 share it but for one texel in 5.
   for (int y : {at.y0, at.y1}) __builtin_prefetch(texels + (size_t(y) * map_.width + at.x0) * 3);
-  if (density) sampling().distribution.prefetch(at.uv);
+  if (density) sampling().texels.prefetch(at.texel);
 }
 
 namespace {
@@ -103,7 +103,7 @@ Eigen::Vector2f rotate_angle(const Eigen::Vector2f& start, float delta) {
 }  // namespace
 
 Environment::Sampling::Sampling(const Image& map)
-    : distribution(sampling_weights(map), map.width, map.height),
+    : texels(sampling_weights(map)),
       tables_exact(kPi / map.height <= 0.05f && 2.0f * kPi / map.width <= 0.05f),
       row_start(map.height),
       column_start(map.width) {
@@ -122,48 +122,59 @@ const Environment::Sampling& Environment::sampling() const {
   return *sampling_;
 }
 
-EnvironmentSample Environment::sample(const Vec2& u) const {
-  float pdf_uv = 0.0f;
-  const Vec2 uv = sampling().distribution.sample(u, &pdf_uv);
-  return sample_at(uv, pdf_uv);
+Environment::SampleNumbers Environment::draw(Pcg32& rng) {
+  SampleNumbers u;
+  u.bits = uint64_t(rng.next_uint()) << 32;
+  u.bits |= rng.next_uint();
+  u.coin = rng.next_float();
+  u.x = rng.next_float();
+  u.y = rng.next_float();
+  return u;
 }
 
-void Environment::sample(std::span<const Vec2> u, std::span<EnvironmentSample> out) const {
-  const Distribution2D& distribution = sampling().distribution;
+EnvironmentSample Environment::sample(Pcg32& rng) const {
+  EnvironmentSample result;
+  sample(rng, std::span(&result, 1));
+  return result;
+}
+
+void Environment::sample(Pcg32& rng, std::span<EnvironmentSample> out) const {
+  const AliasTable& table = sampling().texels;
   constexpr size_t kChunk = 16;
-  for (size_t first = 0; first < u.size(); first += kChunk) {
-    const size_t n = std::min(kChunk, u.size() - first);
-    std::array<int, kChunk> row, start;
-    std::array<float, kChunk> y, pdf_row;
+  std::array<SampleNumbers, kChunk> u;
+  std::array<int, kChunk> slot;
+  for (size_t first = 0; first < out.size(); first += kChunk) {
+    const size_t n = std::min(kChunk, out.size() - first);
     for (size_t k = 0; k < n; ++k) {
-      y[k] = distribution.sample_row(u[first + k].y(), &pdf_row[k], &row[k]);
-      distribution.row(row[k]).prefetch_guide(u[first + k].x());
+      u[k] = draw(rng);
+      slot[k] = table.slot(u[k].bits);
+      table.prefetch(slot[k]);
     }
     for (size_t k = 0; k < n; ++k) {
-      start[k] = distribution.row(row[k]).search_start(u[first + k].x());
-      distribution.row(row[k]).prefetch_bin(start[k]);
-    }
-    for (size_t k = 0; k < n; ++k) {
-      float pdf_column = 0.0f;
-      const float x = distribution.row(row[k]).sample_from(u[first + k].x(), start[k], &pdf_column, nullptr);
-      out[first + k] = sample_at(Vec2(x, y[k]), pdf_row[k] * pdf_column);
+      float pmf = 0.0f;
+      const int texel = table.sample(slot[k], u[k].coin, &pmf);
+      out[first + k] = sample_at(texel, u[k].x, u[k].y, pmf);
     }
   }
 }
 
-EnvironmentSample Environment::sample_at(const Vec2& uv, float pdf_uv) const {
+EnvironmentSample Environment::sample_at(int texel, float x, float y, float pmf) const {
   const Sampling& tables = sampling();
+  // Density in (u, v): the texel's probability over its area 1 / (W H).
+  const float pdf_uv = pmf * float(map_.width) * float(map_.height);
   if (!(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
+  const int i = texel % map_.width, j = texel / map_.width;
   Vec3 d;
   float sin_theta = 0.0f;
   if (tables.tables_exact) {
-    const float x = uv.x() * map_.width, y = uv.y() * map_.height;
-    const int i = std::min(static_cast<int>(x), map_.width - 1), j = std::min(static_cast<int>(y), map_.height - 1);
-    const Eigen::Vector2f theta = rotate_angle(tables.row_start[j], (y - j) * (kPi / map_.height));
-    const Eigen::Vector2f phi = rotate_angle(tables.column_start[i], (x - i) * (2.0f * kPi / map_.width));
+    const Eigen::Vector2f theta = rotate_angle(tables.row_start[j], y * (kPi / map_.height));
+    const Eigen::Vector2f phi = rotate_angle(tables.column_start[i], x * (2.0f * kPi / map_.width));
     sin_theta = theta.x();
     d = Vec3(sin_theta * phi.x(), theta.y(), -sin_theta * phi.y());
   } else {
+    // Kept inside the texel where (i + x) / W rounds up to its edge.
+    const Vec2 uv(std::min((i + x) / map_.width, std::nextafter((i + 1.0f) / map_.width, 0.0f)),
+                  std::min((j + y) / map_.height, std::nextafter((j + 1.0f) / map_.height, 0.0f)));
     d = latlong_to_direction(uv, &sin_theta);
   }
   if (!(sin_theta > 0.0f)) return {Vec3::UnitY(), 0.0f};
@@ -173,7 +184,8 @@ EnvironmentSample Environment::sample_at(const Vec2& uv, float pdf_uv) const {
 
 float Environment::pdf(const EnvironmentLookup& at) const {
   if (!(at.sin_theta > 0.0f)) return 0.0f;
-  return sampling().distribution.pdf(at.uv) / (2.0f * kPi * kPi * at.sin_theta);
+  const float pmf = sampling().texels.pmf(at.texel);
+  return pmf * float(map_.width) * float(map_.height) / (2.0f * kPi * kPi * at.sin_theta);
 }
 
 const ShCoefficients& Environment::sh(int lmax) const {

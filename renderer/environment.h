@@ -12,6 +12,7 @@
 #include "renderer/lanes.h"
 #include "renderer/latlong.h"
 #include "renderer/math.h"
+#include "renderer/rng.h"
 #include "renderer/sampling.h"
 #include "renderer/sh.h"
 
@@ -36,6 +37,7 @@ struct EnvironmentLookup {
   float fx, fy;        // and the weights of x1, y1
   Vec2 uv;
   float sin_theta;
+  int texel;           // row-major index of the texel containing uv (its sampling density)
 };
 
 struct EnvironmentSample {
@@ -66,7 +68,7 @@ class Environment {
   }
 
   // Inline and free of branches, so that a loop locating many directions vectorises.
-  EnvironmentLookup locate(const Vec3& w) const {
+  [[gnu::always_inline]] EnvironmentLookup locate(const Vec3& w) const {
     const Vec3 d = local_to_world_.transpose() * w;
     EnvironmentLookup at;
     at.uv = direction_to_latlong(d, &at.sin_theta);
@@ -74,12 +76,15 @@ class Environment {
     const float x_floor = std::floor(x), y_floor = std::floor(y);
     at.fx = x - x_floor;
     at.fy = y - y_floor;
-    const int width = map_.width, height = map_.height;
-    at.x0 = static_cast<int>(x_floor);  // in [-1, width - 1]: u is in [0, 1)
-    at.x0 = at.x0 < 0 ? at.x0 + width : at.x0;
-    at.x1 = at.x0 + 1 == width ? 0 : at.x0 + 1;
-    at.y0 = std::clamp(static_cast<int>(y_floor), 0, height - 1);
-    at.y1 = std::clamp(static_cast<int>(y_floor) + 1, 0, height - 1);
+    // Texel indices worked out in float (exact for any map size) and converted last:
+    // mixed int arithmetic keeps GCC from vectorising a loop of lookups.
+    const float width = float(map_.width), last_row = float(map_.height - 1);
+    const float x0 = x_floor < 0.0f ? x_floor + width : x_floor;  // x_floor is in [-1, width - 1]
+    at.x0 = static_cast<int>(x0);
+    at.x1 = static_cast<int>(x0 + 1.0f == width ? 0.0f : x0 + 1.0f);
+    at.y0 = static_cast<int>(std::clamp(y_floor, 0.0f, last_row));
+    at.y1 = static_cast<int>(std::clamp(y_floor + 1.0f, 0.0f, last_row));
+    at.texel = texel_of(at.uv, map_.width, map_.height);
     return at;
   }
   // Asks the memory system for the texels eval(at) reads (and, with `density`, the
@@ -88,11 +93,13 @@ class Environment {
 
   // Importance sampling: piecewise constant in (u, v) proportional to luminance times
   // sin(theta) (with each texel's weight the maximum over its 3x3 neighbourhood, so
-  // that every direction where the bilinear lookup is non-zero can be sampled). Built
-  // on first use: a scene that never samples the environment never pays for it.
-  EnvironmentSample sample(const Vec2& u) const;
-  // The same for many u at once, interleaved so that their table lookups overlap.
-  void sample(std::span<const Vec2> u, std::span<EnvironmentSample> out) const;
+  // that every direction where the bilinear lookup is non-zero can be sampled): a texel
+  // from an alias table, then a uniform point in it. Draws five numbers from rng (64
+  // bits for the table entry, a coin, the point). Built on first use: a scene that never
+  // samples the environment never pays for it.
+  EnvironmentSample sample(Pcg32& rng) const;
+  // The same for out.size() samples, interleaved so that their table reads overlap.
+  void sample(Pcg32& rng, std::span<EnvironmentSample> out) const;
   float pdf(const Vec3& w) const { return pdf(locate(w)); }
   float pdf(const EnvironmentLookup& at) const;
 
@@ -104,20 +111,26 @@ class Environment {
   Vec3 uv_to_direction(const Vec2& uv) const;
 
  private:
-  // What importance sampling needs, built on first use: the distribution over texels,
-  // and sin/cos of each row's and column's starting angle, so that a sampled direction
-  // costs no trigonometric calls (angle addition with a short series for the offset
-  // inside the texel, exact to float rounding for texels under 0.05 rad).
+  // What importance sampling needs, built on first use: the alias table over texels
+  // (row-major), and sin/cos of each row's and column's starting angle, so that a
+  // sampled direction costs no trigonometric calls (angle addition with a short series
+  // for the offset inside the texel, exact to float rounding for texels under 0.05 rad).
   struct Sampling {
     explicit Sampling(const Image& map);
-    Distribution2D distribution;
+    AliasTable texels;
     bool tables_exact;  // texels small enough for the series
     std::vector<Eigen::Vector2f> row_start;     // (sin, cos) of theta = pi j / H
     std::vector<Eigen::Vector2f> column_start;  // (sin, cos) of phi = 2 pi i / W
   };
   const Sampling& sampling() const;
-  // The sample at map coordinates uv drawn with density pdf_uv.
-  EnvironmentSample sample_at(const Vec2& uv, float pdf_uv) const;
+  // The five numbers of one sample.
+  struct SampleNumbers {
+    uint64_t bits;
+    float coin, x, y;
+  };
+  static SampleNumbers draw(Pcg32& rng);
+  // The sample at offset (x, y) in [0, 1)^2 inside texel `texel`, whose pmf is given.
+  EnvironmentSample sample_at(int texel, float x, float y, float pmf) const;
 
   Image map_;
   float scale_;
@@ -141,8 +154,11 @@ struct EnvironmentLookups {
   alignas(64) float u[kLanes];
   alignas(64) float v[kLanes];
   alignas(64) float sin_theta[kLanes];
+  alignas(64) int texel[kLanes];
 
-  void locate(const Environment& environment, const Directions& d) {
+  // Always inlined: in the caller, whose lanes are its own locals, the compiler can see
+  // that the lookups, the directions and the map do not overlap, and vectorises.
+  [[gnu::always_inline]] void locate(const Environment& environment, const Directions& d) {
     for (int k = 0; k < kLanes; ++k) {
       const EnvironmentLookup at = environment.locate(Vec3(d.x[k], d.y[k], d.z[k]));
       x0[k] = at.x0;
@@ -154,10 +170,11 @@ struct EnvironmentLookups {
       u[k] = at.uv.x();
       v[k] = at.uv.y();
       sin_theta[k] = at.sin_theta;
+      texel[k] = at.texel;
     }
   }
   EnvironmentLookup operator[](int k) const {
-    return {x0[k], x1[k], y0[k], y1[k], fx[k], fy[k], Vec2(u[k], v[k]), sin_theta[k]};
+    return {x0[k], x1[k], y0[k], y1[k], fx[k], fy[k], Vec2(u[k], v[k]), sin_theta[k], texel[k]};
   }
 };
 

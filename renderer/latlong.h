@@ -33,10 +33,12 @@ inline Vec2 direction_to_latlong(const Vec3& d, float* sin_theta_out = nullptr) 
 
 // The texel of a width x height lat-long map that contains map coordinates uv (row-major
 // index; u wraps around, v is clamped to the map).
+// Worked out in float (exact for any map size) and converted last, so that a loop of
+// lookups vectorises.
 inline int texel_of(const Vec2& uv, int width, int height) {
-  const int i = std::clamp(int(std::floor((uv.x() - std::floor(uv.x())) * width)), 0, width - 1);
-  const int j = std::clamp(int(std::floor(uv.y() * height)), 0, height - 1);
-  return j * width + i;
+  const float i = std::clamp(std::floor((uv.x() - std::floor(uv.x())) * width), 0.0f, float(width - 1));
+  const float j = std::clamp(std::floor(uv.y() * height), 0.0f, float(height - 1));
+  return static_cast<int>(j) * width + static_cast<int>(i);
 }
 
 }  // namespace glaze

@@ -63,7 +63,7 @@ RGB PathTracer::trace_path(const Ray& camera_ray, Pcg32& rng) const {
     const Vec3 origin = hit->position + RayTracer::ray_offset(hit->position) * hit->geometric_normal;
 
     if (use_environment_samples) {
-      const EnvironmentSample light = environment_.sample(Vec2(rng.next_float(), rng.next_float()));
+      const EnvironmentSample light = environment_.sample(rng);
       if (light.pdf > 0.0f && light.direction.dot(hit->geometric_normal) > 0.0f) {
         const Vec3 wi = frame.to_local(light.direction);
         const RGB f = material.eval_diffuse(wo, wi);

@@ -1,5 +1,5 @@
-// sampling.h: piecewise-constant distributions (pbrt's PiecewiseConstant1D/2D), each
-// sampling routine next to its PDF. Used for environment importance sampling.
+// sampling.h: discrete importance sampling (Walker's alias method) and multiple
+// importance sampling's weights. Used for environment importance sampling.
 #pragma once
 
 #include "renderer/math.h"
@@ -17,84 +17,45 @@ inline float power_heuristic(float pdf_a, float pdf_b) {
   return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
-// A piecewise-constant density on [0, 1) with n equal bins proportional to `weights`
-// (non-negative; if all are zero the density is uniform). Sampling inverts the CDF
-// exactly (monotone, so stratified inputs stay stratified) in expected O(1) time with a
-// guide table (Chen and Asau's cutpoint method) instead of a binary search, whose
-// mispredicted branches and scattered loads dominated the cost.
-class Distribution1D {
+// n outcomes drawn with probability pmf(i) proportional to non-negative weights (all
+// zero: uniform), by Walker's alias method in Vose's construction: a draw reads one
+// table entry, chosen uniformly, and keeps it or takes its alias by a coin against the
+// entry's threshold. That is one memory access with no search, so a caller drawing
+// many samples can prefetch every entry before reading any (an inverted CDF needs a
+// search whose reads depend on each other: on a large environment map, two cache misses
+// in a row). Outcomes of zero weight are never drawn.
+class AliasTable {
  public:
-  explicit Distribution1D(std::span<const float> weights);
+  explicit AliasTable(std::span<const float> weights);
 
-  int size() const { return static_cast<int>(bins_.size()) - 1; }
-  // Mean of the weights (the integral of the unnormalised function over [0, 1)).
-  double integral() const { return integral_; }
+  int size() const { return static_cast<int>(entries_.size()); }
+  float pmf(int i) const { return entries_[i].pmf; }
 
-  // Maps u in [0, 1) to x in [0, 1) with density pdf(x); never picks a zero-weight bin.
-  float sample(float u, float* pdf, int* bin) const { return sample_from(u, search_start(u), pdf, bin); }
-
-  // sample() in steps, for callers that interleave many samples so that their cache
-  // misses overlap: the guide entry of u (prefetch_guide) names the bin where the search
-  // starts (search_start), whose entries (prefetch_bin) the search then reads.
-  void prefetch_guide(float u) const { __builtin_prefetch(&bins_[guide_index(u)]); }
-  int search_start(float u) const { return bins_[guide_index(u)].guide; }
-  void prefetch_bin(int i) const {
-    __builtin_prefetch(&bins_[i]);
-    __builtin_prefetch(&bins_[i + 1]);
+  // The entry that 64 uniform random bits select (exactly uniform to 2^-64 for any n),
+  // then the outcome that a coin uniform in [0, 1) picks from it, with its pmf.
+  int slot(uint64_t bits) const {
+    return static_cast<int>((static_cast<unsigned __int128>(bits) * entries_.size()) >> 64);
   }
-  float sample_from(float u, int start, float* pdf, int* bin) const;
-  float pdf(float x) const;
-  // Starts loading what pdf(x) reads.
-  void prefetch(float x) const { __builtin_prefetch(&bins_[bin_of(x)]); }
+  void prefetch(int slot) const { __builtin_prefetch(&entries_[slot]); }
+  int sample(int slot, float coin, float* pmf) const {
+    const Entry& entry = entries_[slot];
+    const bool keep = coin < entry.threshold;
+    if (pmf) *pmf = keep ? entry.pmf : entry.alias_pmf;
+    return keep ? slot : entry.alias;
+  }
+
+  // The probability that sample() returns i, summed from the table (for tests: it must
+  // equal pmf(i) up to float rounding of the thresholds).
+  double selection_probability(int i) const;
 
  private:
-  // Per bin: the CDF at its start, its normalised density and the guide entry of the
-  // same index, side by side: the search starts at bins_[floor(u n)].guide, usually in
-  // the same cache line, so a sample costs about one cache miss. n + 1 entries, the
-  // last with cdf 1.
-  struct Bin {
-    float cdf;
-    float pdf;
-    float inverse_width;  // 1 / (cdf of the next bin - cdf), 0 for an empty bin
-    int32_t guide;        // first bin whose cdf interval reaches (this index) / n
+  struct Entry {
+    float threshold;  // keep this entry's outcome if coin < threshold
+    int32_t alias;    // else this outcome
+    float pmf;        // of this entry's outcome
+    float alias_pmf;  // of the alias, stored here so that a draw reads one entry
   };
-  std::vector<Bin> bins_;
-  double integral_ = 0.0;
-  float inverse_size_ = 1.0f;
-
-  int bin_of(float x) const { return std::clamp(static_cast<int>(x * size()), 0, size() - 1); }
-  int guide_index(float u) const { return bin_of(u); }
-};
-
-// A piecewise-constant density on [0, 1)^2 over a width x height grid of weights (row
-// major, row 0 at y = 0): a marginal over rows, then a conditional within the row.
-class Distribution2D {
- public:
-  Distribution2D(std::span<const float> weights, int width, int height);
-
-  // Maps u in [0, 1)^2 to (x, y) in [0, 1)^2 with density pdf(x, y) (w.r.t. area).
-  Vec2 sample(const Vec2& u, float* pdf) const;
-  float pdf(const Vec2& p) const;
-  void prefetch(const Vec2& p) const { __builtin_prefetch(&density_[cell_of(p)]); }
-
-  // sample() in steps, for callers that interleave many samples: choose the row, then
-  // the row's guide entry and the bins it points to load while other samples take the
-  // same steps, then sample within the row (see Distribution1D).
-  float sample_row(float u, float* pdf, int* row) const { return marginal_.sample(u, pdf, row); }
-  const Distribution1D& row(int row) const { return rows_[row]; }
-
- private:
-  int row_of(float y) const { return std::clamp(static_cast<int>(y * height_), 0, height_ - 1); }
-  size_t cell_of(const Vec2& p) const {
-    return size_t(row_of(p.y())) * width_ + std::clamp(static_cast<int>(p.x() * width_), 0, width_ - 1);
-  }
-
-  int width_, height_;
-  std::vector<Distribution1D> rows_;
-  Distribution1D marginal_;
-  // pdf() of each cell, row-major: one load where the product of the marginal's and the
-  // row's densities would be two, one behind a pointer.
-  std::vector<float> density_;
+  std::vector<Entry> entries_;
 };
 
 }  // namespace glaze

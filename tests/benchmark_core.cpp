@@ -39,14 +39,15 @@ BENCHMARK(BM_ShProjection1024x512)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMi
 // 10M samples per iteration, split over TBB tasks with one generator per chunk.
 void BM_EnvironmentSample10M(benchmark::State& state) {
   const Environment env(office_map(), {});
-  env.sample(Vec2(0.5f, 0.5f));  // build the distribution outside the timing
+  Pcg32 warm_up;
+  env.sample(warm_up);  // build the alias table outside the timing
   constexpr int kSamples = 10'000'000, kChunk = 1 << 16;
   for (auto _ : state) {
     tbb::parallel_for(0, (kSamples + kChunk - 1) / kChunk, [&](int chunk) {
       Pcg32 rng(1, chunk);
       float sum = 0.0f;
       const int end = std::min(kSamples, (chunk + 1) * kChunk);
-      for (int k = chunk * kChunk; k < end; ++k) sum += env.sample(Vec2(rng.next_float(), rng.next_float())).pdf;
+      for (int k = chunk * kChunk; k < end; ++k) sum += env.sample(rng).pdf;
       benchmark::DoNotOptimize(sum);
     });
   }
@@ -57,18 +58,17 @@ BENCHMARK(BM_EnvironmentSample10M)->Unit(benchmark::kMillisecond)->UseRealTime()
 // The same through the batched interface the path tracer uses (16 at a time).
 void BM_EnvironmentSampleBatched10M(benchmark::State& state) {
   const Environment env(office_map(), {});
-  env.sample(Vec2(0.5f, 0.5f));
+  Pcg32 warm_up;
+  env.sample(warm_up);
   constexpr int kSamples = 10'000'000, kChunk = 1 << 16, kBatch = 16;
   for (auto _ : state) {
     tbb::parallel_for(0, (kSamples + kChunk - 1) / kChunk, [&](int chunk) {
       Pcg32 rng(1, chunk);
-      std::array<Vec2, kBatch> u;
       std::array<EnvironmentSample, kBatch> out;
       float sum = 0.0f;
       const int end = std::min(kSamples, (chunk + 1) * kChunk);
       for (int k = chunk * kChunk; k < end; k += kBatch) {
-        for (Vec2& v : u) v = Vec2(rng.next_float(), rng.next_float());
-        env.sample(u, out);
+        env.sample(rng, out);
         for (const EnvironmentSample& s : out) sum += s.pdf;
       }
       benchmark::DoNotOptimize(sum);

@@ -120,7 +120,7 @@ void check_sampling(const Environment& env, int samples, uint64_t seed) {
   Pcg32 rng(seed);
   int disagreements = 0;
   for (int k = 0; k < samples; ++k) {
-    const EnvironmentSample s = env.sample(Vec2(rng.next_float(), rng.next_float()));
+    const EnvironmentSample s = env.sample(rng);
     ASSERT_TRUE(s.direction.allFinite());
     if (s.pdf == 0.0f) continue;
     ASSERT_NEAR(s.direction.norm(), 1.0f, 1e-4f);
@@ -150,7 +150,7 @@ void check_unbiased_integral(const Environment& env, int samples, uint64_t seed)
   Pcg32 rng(seed);
   double sum = 0.0, sum_squares = 0.0;
   for (int k = 0; k < samples; ++k) {
-    const EnvironmentSample s = env.sample(Vec2(rng.next_float(), rng.next_float()));
+    const EnvironmentSample s = env.sample(rng);
     const double value = s.pdf > 0 ? luminance(env.eval(s.direction)) / env.scale() / s.pdf : 0.0;
     sum += value;
     sum_squares += value * value;

@@ -1,4 +1,4 @@
-// Tests of the quadrature rules and the piecewise-constant distributions.
+// Tests of the quadrature rules, the alias table and the low-discrepancy points.
 #include "renderer/low_discrepancy.h"
 #include "renderer/quadrature.h"
 #include "renderer/rng.h"
@@ -22,96 +22,72 @@ TEST(GaussLegendre, IntegratesPolynomialsExactly) {
   }
 }
 
-TEST(Distribution1D, SamplesFollowWeightsAndSkipEmptyBins) {
+// Draws from an alias table with the generator the environment sampler uses.
+int draw(const AliasTable& table, Pcg32& rng, float* pmf) {
+  const uint64_t bits = uint64_t(rng.next_uint()) << 32 | rng.next_uint();
+  return table.sample(table.slot(bits), rng.next_float(), pmf);
+}
+
+TEST(AliasTable, SamplesFollowWeightsAndSkipEmptyOutcomes) {
   const std::vector<float> weights = {0.0f, 1.0f, 3.0f, 0.0f, 4.0f, 0.0f};
-  const Distribution1D distribution(weights);
-  EXPECT_NEAR(distribution.integral(), 8.0 / 6.0, 1e-12);
+  const AliasTable table(weights);
   std::vector<double> observed(6, 0.0), expected(6, 0.0);
   Pcg32 rng(1);
   const int n = 80000;
   for (int k = 0; k < n; ++k) {
-    float pdf = 0;
-    int bin = -1;
-    const float x = distribution.sample(rng.next_float(), &pdf, &bin);
-    ASSERT_GE(x, 0.0f);
-    ASSERT_LT(x, 1.0f);
-    ASSERT_EQ(bin, int(x * 6));
-    ASSERT_GT(weights[bin], 0.0f);
-    ASSERT_FLOAT_EQ(pdf, distribution.pdf(x));
-    observed[bin] += 1;
+    float pmf = 0;
+    const int i = draw(table, rng, &pmf);
+    ASSERT_GT(weights[i], 0.0f);
+    ASSERT_EQ(pmf, table.pmf(i));
+    observed[i] += 1;
   }
-  for (int i = 0; i < 6; ++i) expected[i] = n * weights[i] / 8.0;
+  for (int i = 0; i < 6; ++i) {
+    expected[i] = n * weights[i] / 8.0;
+    EXPECT_FLOAT_EQ(table.pmf(i), weights[i] / 8.0f);
+  }
   EXPECT_GT(testing::chi_square_p_value(observed, expected), 1e-3);
-  // Edge values of u land in non-empty bins.
-  int bin = -1;
-  distribution.sample(0.0f, nullptr, &bin);
-  EXPECT_EQ(bin, 1);
-  distribution.sample(0x1.fffffep-1f, nullptr, &bin);
-  EXPECT_EQ(bin, 4);
+  // The extreme coins and entries reach no empty outcome.
+  for (int slot = 0; slot < 6; ++slot)
+    for (float coin : {0.0f, 0x1.fffffep-1f}) EXPECT_GT(weights[table.sample(slot, coin, nullptr)], 0.0f);
+  EXPECT_EQ(table.slot(0), 0);
+  EXPECT_EQ(table.slot(~uint64_t(0)), 5);
 }
 
-TEST(Distribution1D, AllZeroWeightsBecomeUniform) {
+TEST(AliasTable, AllZeroWeightsBecomeUniform) {
   const std::vector<float> zeros(4, 0.0f);
-  const Distribution1D distribution(zeros);
-  EXPECT_FLOAT_EQ(distribution.pdf(0.3f), 1.0f);
-  float pdf = 0;
-  EXPECT_NEAR(distribution.sample(0.6f, &pdf, nullptr), 0.6f, 1e-6f);
+  const AliasTable table(zeros);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_FLOAT_EQ(table.pmf(i), 0.25f);
+    EXPECT_NEAR(table.selection_probability(i), 0.25, 1e-12);
+  }
 }
 
-TEST(Distribution1D, LongRowsWithExtremeWeightsStayConsistent) {
-  // Weights spanning 1e-38..1e3 (subnormal CDF widths) over many bins: every sample must
-  // be finite, land in a bin of non-zero weight, and pdf(x) must report the density the
-  // sample was drawn with, even where (i + du) / n rounds onto the next bin.
+TEST(AliasTable, TableSelectsEachOutcomeWithItsPmfEvenForExtremeWeights) {
+  // Weights spanning 1e-38..1e3 with zeros between: the probability the table gives
+  // each outcome, summed over its entries, is the pmf it reports (to float rounding of
+  // the thresholds), the pmfs sum to 1, and no zero weight is ever selectable.
   Pcg32 rng(11);
-  for (int n : {361, 1450, 4096}) {
+  for (int n : {1, 7, 361, 1450, 4096}) {
     std::vector<float> weights(n);
+    double total = 0;
     for (int i = 0; i < n; ++i) {
       const uint32_t kind = rng.next_uint() % 4;
       weights[i] = kind == 0 ? 0.0f : kind == 1 ? 1e-38f * rng.next_float() : std::ldexp(rng.next_float(), int(rng.next_uint() % 10));
+      total += weights[i];
     }
-    const Distribution1D distribution(weights);
-    for (int k = 0; k < 200000; ++k) {
-      const float u = k < 3 ? (k == 0 ? 0.0f : k == 1 ? 0x1.fffffep-1f : 0.5f) : rng.next_float();
-      float pdf = 0;
-      int bin = -1;
-      const float x = distribution.sample(u, &pdf, &bin);
-      ASSERT_TRUE(std::isfinite(x) && x >= 0.0f && x < 1.0f) << "n " << n << " u " << u;
-      ASSERT_GT(weights[bin], 0.0f);
-      ASSERT_EQ(int(x * n), bin) << "n " << n << " u " << u;
-      ASSERT_EQ(distribution.pdf(x), pdf);
+    if (total == 0) weights[0] = 1.0f, total = 1.0;
+    const AliasTable table(weights);
+    double pmf_sum = 0;
+    for (int i = 0; i < n; ++i) {
+      const double p = table.selection_probability(i);
+      pmf_sum += table.pmf(i);
+      ASSERT_NEAR(p, weights[i] / total, 1e-6 * weights[i] / total + 1e-12) << "n " << n << " i " << i;
+      ASSERT_NEAR(table.pmf(i), weights[i] / total, 1e-6 * weights[i] / total + 1e-30) << "n " << n << " i " << i;
+      if (weights[i] == 0.0f) ASSERT_EQ(p, 0.0) << "n " << n << " i " << i;
     }
+    EXPECT_NEAR(pmf_sum, 1.0, 1e-5) << "n " << n;
   }
 }
-
-TEST(Distribution2D, PdfIntegratesToOneAndMatchesSamples) {
-  const int w = 5, h = 3;
-  std::vector<float> weights(w * h);
-  for (int i = 0; i < w * h; ++i) weights[i] = float((i * 7) % 5);
-  const Distribution2D distribution(weights, w, h);
-  double integral = 0;
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i) integral += distribution.pdf(Vec2((i + 0.5f) / w, (j + 0.5f) / h)) / (w * h);
-  EXPECT_NEAR(integral, 1.0, 1e-6);
-  std::vector<double> observed(w * h, 0), expected(w * h, 0);
-  double total = 0;
-  for (float v : weights) total += v;
-  Pcg32 rng(2);
-  const int n = 60000;
-  for (int k = 0; k < n; ++k) {
-    float pdf = 0;
-    const Vec2 p = distribution.sample(Vec2(rng.next_float(), rng.next_float()), &pdf);
-    ASSERT_FLOAT_EQ(pdf, distribution.pdf(p));
-    observed[int(p.y() * h) * w + int(p.x() * w)] += 1;
-  }
-  for (int i = 0; i < w * h; ++i) expected[i] = n * weights[i] / total;
-  EXPECT_GT(testing::chi_square_p_value(observed, expected), 1e-3);
-}
-
-}  // namespace
-}  // namespace glaze
-
-namespace glaze {
-namespace {
 
 TEST(ScrambledSobol, FirstPowerOfTwoPointsFormA02Net) {
   // For N = 2^m points and every split a + b = m, each of the 2^a x 2^b equal rectangles

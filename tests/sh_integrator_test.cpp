@@ -32,10 +32,14 @@ struct ModelErrors {
   double noise;                   // relative RMSE of the path-traced reference itself
   std::map<int, double> by_lmax;  // sh error beyond that noise
   double truncation4;             // sh at lmax 4 against sh at lmax 32
+  double truncation8;             // sh at lmax 8 against sh at lmax 32 (noise-free)
   double unclamped4;              // sh error at lmax 4 without clamping negative diffuse sums
 };
 
-ModelErrors measure(const std::string& environment_spec) {
+// `spp` per half of the reference: the error beyond the reference's noise is
+// sqrt(e^2 - noise^2), whose own scatter grows with the noise (about 0.2 of it here), so
+// a lighting whose small bright sources make the path tracer noisy needs more.
+ModelErrors measure(const std::string& environment_spec, int spp = 1024) {
   const Scene scene = load_scene(std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf");
   const Environment environment = make_environment(environment_spec);
   const RayTracer tracer(scene);
@@ -45,7 +49,7 @@ ModelErrors measure(const std::string& environment_spec) {
   path_options.black_background = true;
   const PathTracer path_tracer(scene, tracer, environment, path_options);
   RenderOptions options;
-  options.spp = 1024;
+  options.spp = spp;
   options.pixel_centres = true;
   options.seed = 11;
   const Image first = render(path_tracer, camera, options).image;
@@ -61,14 +65,17 @@ ModelErrors measure(const std::string& environment_spec) {
     const double measured = image_error(sh(lmax), reference, mask).relative_rmse;
     errors.by_lmax[lmax] = std::sqrt(std::max(0.0, measured * measured - errors.noise * errors.noise));
   }
-  errors.truncation4 = image_error(sh(4), sh(32), mask).relative_rmse;
+  const Image converged = sh(32);
+  errors.truncation4 = image_error(sh(4), converged, mask).relative_rmse;
+  errors.truncation8 = image_error(sh(8), converged, mask).relative_rmse;
   const Image unclamped = render_sh(scene, tracer, environment, camera, {4, 1, true, 0, false});
   const double measured = image_error(unclamped, reference, mask).relative_rmse;
   errors.unclamped4 = std::sqrt(std::max(0.0, measured * measured - errors.noise * errors.noise));
   std::printf("%s: reference noise %.3f%%, sh error beyond it: lmax 2 %.3f%%, 4 %.3f%%, 8 %.3f%%, 16 %.3f%%; "
-              "truncation at lmax 4 (vs lmax 32) %.3f%%, lmax 4 unclamped %.3f%%\n",
+              "truncation (vs lmax 32) at lmax 4 %.3f%%, 8 %.3f%%, lmax 4 unclamped %.3f%%\n",
               environment_spec.c_str(), 100 * errors.noise, 100 * errors.by_lmax[2], 100 * errors.by_lmax[4],
-              100 * errors.by_lmax[8], 100 * errors.by_lmax[16], 100 * errors.truncation4, 100 * errors.unclamped4);
+              100 * errors.by_lmax[8], 100 * errors.by_lmax[16], 100 * errors.truncation4, 100 * errors.truncation8,
+              100 * errors.unclamped4);
   return errors;
 }
 
@@ -90,11 +97,15 @@ TEST(ShIntegratorAcceptance, OfficeWithinOnePercentAtLmax4) {
 
 // The blue room's two projector spots are small and bright: the diffuse response to a
 // near point light has energy far beyond l = 4, and lmax 4 is not within 1% here (the
-// measured figure is printed and reported); lmax 8 is.
+// measured figure is printed and reported); lmax 8 is: its truncation, noise-free, is
+// under 1%, and the path tracer agrees with it. The spots also make the path tracer
+// noisy (3.1% at 1024 spp per half): 8192 per half brings that to 1.1%, and the error
+// beyond the noise scatters by about 0.2% of it.
 TEST(ShIntegratorAcceptance, BlueRoomWithinOnePercentAtLmax8) {
-  const ModelErrors e = measure("procedural:blue-room");
+  const ModelErrors e = measure("procedural:blue-room", 8192);
   expect_model_agrees_up_to_truncation(e);
-  EXPECT_LT(e.by_lmax.at(8), 0.01);
+  EXPECT_LT(e.truncation8, 0.01);
+  EXPECT_NEAR(e.by_lmax.at(8), e.truncation8, 0.003);
 }
 
 TEST(ShIntegratorAcceptance, RealMapsAgreeUpToTruncation) {
