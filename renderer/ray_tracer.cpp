@@ -52,8 +52,9 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
   if (!args->valid[0]) return;
   const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
   auto* ray = reinterpret_cast<RTCRay*>(args->ray);
+  const Sphere& s = (*spheres)[args->primID];
   const Vec3 origin(ray->org_x, ray->org_y, ray->org_z), direction(ray->dir_x, ray->dir_y, ray->dir_z);
-  if (!std::isnan(sphere_hit_distance(origin, direction, (*spheres)[args->primID].center, (*spheres)[args->primID].radius, ray->tnear, ray->tfar)))
+  if (!std::isnan(sphere_hit_distance(origin, direction, s.center, s.radius, ray->tnear, ray->tfar)))
     ray->tfar = -std::numeric_limits<float>::infinity();
 }
 
@@ -215,7 +216,10 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool tex
 }
 
 bool RayTracer::occluded(const Ray& ray, float max_distance) const {
-  if (lone_sphere_) return !std::isnan(sphere_hit_distance(ray.origin, ray.direction, scene_.spheres.front().center, scene_.spheres.front().radius, 0.0, max_distance));
+  if (lone_sphere_) {
+    const Sphere& sphere = scene_.spheres.front();
+    return !std::isnan(sphere_hit_distance(ray.origin, ray.direction, sphere.center, sphere.radius, 0.0, max_distance));
+  }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r{};
