@@ -160,8 +160,7 @@ void Environment::sample(Pcg32& rng, std::span<EnvironmentSample> out) const {
 
 EnvironmentSample Environment::sample_at(int texel, float x, float y, float pmf) const {
   const Sampling& tables = sampling();
-  // Density in (u, v): the texel's probability over its area 1 / (W H).
-  const float pdf_uv = pmf * float(map_.width) * float(map_.height);
+  const float pdf_uv = texel_density(pmf);
   if (!(pdf_uv > 0.0f)) return {Vec3::UnitY(), 0.0f};
   const int i = texel % map_.width, j = texel / map_.width;
   Vec3 d;
@@ -184,8 +183,7 @@ EnvironmentSample Environment::sample_at(int texel, float x, float y, float pmf)
 
 float Environment::pdf(const EnvironmentLookup& at) const {
   if (!(at.sin_theta > 0.0f)) return 0.0f;
-  const float pmf = sampling().texels.pmf(at.texel);
-  return pmf * float(map_.width) * float(map_.height) / (2.0f * kPi * kPi * at.sin_theta);
+  return texel_density(sampling().texels.pmf(at.texel)) / (2.0f * kPi * kPi * at.sin_theta);
 }
 
 const ShCoefficients& Environment::sh(int lmax) const {

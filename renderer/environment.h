@@ -129,6 +129,8 @@ class Environment {
     float coin, x, y;
   };
   static SampleNumbers draw(Pcg32& rng);
+  // Density in (u, v) of a texel drawn with probability pmf: pmf over its area 1 / (W H).
+  float texel_density(float pmf) const { return pmf * float(map_.width) * float(map_.height); }
   // The sample at offset (x, y) in [0, 1)^2 inside texel `texel`, whose pmf is given.
   EnvironmentSample sample_at(int texel, float x, float y, float pmf) const;
 

@@ -66,15 +66,26 @@ const std::array<double, kInverseSteps + 1>& diffuse_lobe_inverse_table() {
   return table;
 }
 
+// Where solving C(mu) = u starts: the target, the table interval that brackets the root
+// and the linear guess inside it.
+struct LobeInverseStart {
+  double target;
+  int interval;
+  double low, high, guess;
+};
+
+LobeInverseStart diffuse_lobe_inverse_start(const std::array<double, kInverseSteps + 1>& table, float u) {
+  const double target = std::clamp(static_cast<double>(u), 0.0, 1.0);
+  const double t = target * kInverseSteps;
+  const int k = std::min(static_cast<int>(t), kInverseSteps - 1);
+  return {target, k, table[k], table[k + 1], table[k] + (t - k) * (table[k + 1] - table[k])};
+}
+
 }  // namespace
 
 float diffuse_lobe_cos_theta(float u) {
-  const double target = std::clamp(static_cast<double>(u), 0.0, 1.0);
-  const auto& table = diffuse_lobe_inverse_table();
-  const double t = target * kInverseSteps;
-  const int k = std::min(static_cast<int>(t), kInverseSteps - 1);
-  const double guess = table[k] + (t - k) * (table[k + 1] - table[k]);
-  return static_cast<float>(invert_diffuse_lobe_cdf(target, guess, table[k], table[k + 1]));
+  const LobeInverseStart start = diffuse_lobe_inverse_start(diffuse_lobe_inverse_table(), u);
+  return static_cast<float>(invert_diffuse_lobe_cdf(start.target, start.guess, start.low, start.high));
 }
 
 void diffuse_lobe_cos_theta(std::span<const float> u, std::span<float> cos_theta) {
@@ -88,20 +99,17 @@ void diffuse_lobe_cos_theta(std::span<const float> u, std::span<float> cos_theta
     // and three steps reach double precision; lanes that did not converge (the first
     // interval, where C ~ 3.5 mu^3) take the safeguarded scalar solver.
     for (int k = 0; k < kLanes; ++k) {
-      const double target = std::clamp(static_cast<double>(u[first + std::min(k, n - 1)]), 0.0, 1.0);
-      const double t = target * kInverseSteps;
-      const int i = std::min(static_cast<int>(t), kInverseSteps - 1);
-      const double low = table[i], high = table[i + 1];
-      double x = low + (t - i) * (high - low), step = 1.0;
+      const LobeInverseStart start = diffuse_lobe_inverse_start(table, u[first + std::min(k, n - 1)]);
+      double x = start.guess, step = 1.0;
       for (int iteration = 0; iteration < 3; ++iteration) {
         double density = 0.0;
-        const double error = diffuse_lobe_cdf(x, &density) - target;
-        const double next = std::clamp(density > 0.0 ? x - error / density : x, low, high);
+        const double error = diffuse_lobe_cdf(x, &density) - start.target;
+        const double next = std::clamp(density > 0.0 ? x - error / density : x, start.low, start.high);
         step = next - x;
         x = next;
       }
       mu[k] = static_cast<float>(x);
-      converged[k] = i > 0 && std::abs(step) < 1e-10 ? 1 : 0;
+      converged[k] = start.interval > 0 && std::abs(step) < 1e-10 ? 1 : 0;
     }
     for (int k = 0; k < n; ++k) cos_theta[first + k] = converged[k] ? mu[k] : diffuse_lobe_cos_theta(u[first + k]);
   }
