@@ -67,6 +67,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   const FinishPreview finish_preview{preview};
   stage = Clock::now();
   std::optional<JointFit> joint_fit;
+  JointFitOptions joint_options;
   FitObserver observer;
   // The lighting at each iterate is solved on the preview's thread, for the newest only.
   if (preview)
@@ -75,7 +76,14 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
         return std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map, EnvironmentOptions{}, "lighting at the iterate");
       }, iterate_label(it));
     };
-  if (joint) joint_fit = fit_joint(data, options, static_cast<int>(args.integer("max-iterations", 100, 1, 10000)), observer);
+  if (joint) {
+    joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
+    // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact
+    // for the fit's model when that is at most the fit's lmax (see joint_fit.h).
+    joint_options.band_limited_diffuse = in.captures.renderer.is_object() && in.captures.renderer.value("integrator", "") == "sh" &&
+                                         capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
+    joint_fit = fit_joint(data, in.samples, options, joint_options, observer);
+  }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
   const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
@@ -101,6 +109,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
          std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
   if (joint) {
     result["iterations"] = joint_fit->iterations;
+    result["evaluations"] = joint_fit->evaluations;
+    result["band_limited_diffuse"] = joint_options.band_limited_diffuse;
     result["converged"] = joint_fit->converged;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
@@ -165,7 +175,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
          "bright source?), so L_lm may be off by several percent; use more pixels on the object, or more views");
   if (joint && !joint_fit->converged)
     warn("the joint fit stopped after " + std::to_string(joint_fit->iterations) +
-         " iterations without converging (solver.txt says why): R0 and Rd are the last iterate; raise --max-iterations "
+         " rounds with R0 still moving (solver.txt lists them): R0 and Rd are the last round's; raise --max-iterations "
          "or add views");
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
@@ -183,7 +193,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
                 fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2]);
   write_fit(out, result, joint ? joint_fit->full_report : std::string(linear_report));
   if (joint)
-    std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d iterations, %s)\n", material.R0(), material.Rd()[0],
+    std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d rounds, %s)\n", material.R0(), material.Rd()[0],
                 material.Rd()[1], material.Rd()[2], joint_fit->iterations, joint_fit->converged ? "converged" : "NOT converged");
   std::printf("lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
               lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,

@@ -1,4 +1,4 @@
-// fit_progress.h: how the material fits report their iterates while they run, so that
+// fit_progress.h: how the material and joint fits report their iterates while they run, so that
 // a caller can show them (`glaze invert-fit --preview` re-renders each view at them).
 // The report is optional and costs nothing when no observer is set.
 #pragma once
@@ -12,7 +12,7 @@
 namespace glaze {
 
 struct FitIterate {
-  int iteration = 0;  // Ceres' iteration number (0: the starting point)
+  int iteration = 0;  // Ceres' iteration number (0: the starting point); the joint fit's round
   float R0 = 0.0f;
   RGB Rd = RGB::Zero();
   double cost = 0.0;  // Ceres' cost (half the sum of squared residuals)

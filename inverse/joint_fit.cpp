@@ -1,91 +1,72 @@
 #include "inverse/joint_fit.h"
 
+#include "inverse/cross_view.h"
 #include "renderer/error.h"
 #include "renderer/material.h"
 
-#include <ceres/ceres.h>
-
+#include <algorithm>
 #include <array>
-#include <utility>
-#include <vector>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace glaze {
 namespace {
 
-// The system's profiles at the R0 values asked for last: Ceres' central differences
-// ask for R0 and R0 +- h while the Rd vary, so a handful covers an iteration, and each
-// costs one pass over the texels. (One Ceres thread: no locking.)
-class ProfileCache {
- public:
-  explicit ProfileCache(const MapConsistentSystem& system) : system_(system) {}
-  const MapConsistentSystem::Profile& at(double R0) {
-    for (const auto& [key, profile] : entries_)
-      if (key == R0) return profile;
-    if (entries_.size() == kSize) entries_.erase(entries_.begin());
-    entries_.emplace_back(R0, system_.profile(R0));
-    return entries_.back().second;
+// Brent's minimisation (golden sections with parabolic steps) of f on [a, b], from x
+// inside it with f(x) = fx, to 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
+template <typename Function>
+double minimise_bracketed(Function&& f, double a, double b, double x, double fx) {
+  constexpr double kGolden = 0.3819660112501051;
+  double w = x, v = x, fw = fx, fv = fx, step = 0.0, previous_step = 0.0;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double middle = 0.5 * (a + b), tolerance = 1e-4 * std::abs(x) + 1e-5;
+    if (std::abs(x - middle) <= 2.0 * tolerance - 0.5 * (b - a)) break;
+    bool parabolic = false;
+    if (std::abs(previous_step) > tolerance) {
+      // The parabola through (x, w, v); its step is taken when it falls inside the
+      // bracket and is under half the step before last.
+      const double r = (x - w) * (fx - fv);
+      double q = (x - v) * (fx - fw), p = (x - v) * q - (x - w) * r;
+      q = 2.0 * (q - r);
+      if (q > 0.0) p = -p;
+      q = std::abs(q);
+      if (std::abs(p) < std::abs(0.5 * q * previous_step) && p > q * (a - x) && p < q * (b - x)) {
+        previous_step = step, step = p / q, parabolic = true;
+        if (x + step - a < 2.0 * tolerance || b - (x + step) < 2.0 * tolerance) step = x < middle ? tolerance : -tolerance;
+      }
+    }
+    if (!parabolic) previous_step = (x < middle ? b : a) - x, step = kGolden * previous_step;
+    const double u = std::abs(step) >= tolerance ? x + step : x + (step > 0.0 ? tolerance : -tolerance);
+    const double fu = f(u);
+    if (fu <= fx) {
+      (u < x ? b : a) = x;
+      v = w, fv = fw, w = x, fw = fx, x = u, fx = fu;
+    } else {
+      (u < x ? a : b) = u;
+      if (fu <= fw || w == x) v = w, fv = fw, w = u, fw = fu;
+      else if (fu <= fv || v == x || v == w) v = u, fv = fu;
+    }
   }
+  return x;
+}
 
- private:
-  static constexpr size_t kSize = 4;
-  const MapConsistentSystem& system_;
-  std::vector<std::pair<double, MapConsistentSystem::Profile>> entries_;
-};
-
-// One residual per channel: the square root of the channel's least-squares misfit for
-// material (R0, Rd_c), minimised over its lighting. The channels share only R0.
-struct JointMisfit {
-  ProfileCache* profiles;
-  bool operator()(const double* const material, double* residuals) const {
-    const MapConsistentSystem::Profile& profile = profiles->at(material[0]);
-    for (int c = 0; c < 3; ++c) residuals[c] = std::sqrt(profile.squared_error(material[1 + c], c));
-    return true;
+// The grid's best point and its neighbours as a bracket, then Brent's method in it.
+template <typename Function>
+double minimise_on(Function&& f, const std::vector<double>& grid) {
+  size_t best = 0;
+  double best_value = INFINITY;
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const double value = f(grid[i]);
+    if (value < best_value) best_value = value, best = i;
   }
-};
-
-// Bounded Levenberg-Marquardt over (R0, Rd) from `material`, which it updates.
-ceres::Solver::Summary solve_material(ProfileCache& profiles, std::array<double, 4>& material, int max_iterations,
-                                      const FitObserver& observer) {
-  const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
-  const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
-  ceres::Problem problem;
-  problem.AddResidualBlock(new ceres::NumericDiffCostFunction<JointMisfit, ceres::CENTRAL, 3, 4>(new JointMisfit{&profiles}),
-                           nullptr, material.data());
-  problem.SetParameterLowerBound(material.data(), 0, r0_bounds.lower);
-  problem.SetParameterUpperBound(material.data(), 0, r0_bounds.upper);
-  for (int c = 1; c <= 3; ++c) {
-    problem.SetParameterLowerBound(material.data(), c, rd_bounds.lower);
-    problem.SetParameterUpperBound(material.data(), c, rd_bounds.upper);
-  }
-  ceres::Solver::Options solver;
-  solver.minimizer_type = ceres::TRUST_REGION;
-  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.max_num_iterations = max_iterations;
-  solver.function_tolerance = 1e-12;
-  solver.gradient_tolerance = 1e-14;
-  solver.parameter_tolerance = 1e-10;
-  solver.num_threads = 1;
-  solver.logging_type = ceres::SILENT;
-  FitObserverCallback report(observer, [&](FitIterate& iterate) {
-    iterate.R0 = float(material[0]);
-    iterate.Rd = RGB(float(material[1]), float(material[2]), float(material[3]));
-  });
-  if (observer) {
-    solver.update_state_every_iteration = true;
-    solver.callbacks.push_back(&report);
-  }
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  return summary;
-
+  return minimise_bracketed(f, grid[best > 0 ? best - 1 : 0], grid[std::min(best + 1, grid.size() - 1)], grid[best], best_value);
 }
 
 }  // namespace
 
-JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations,
-                   const FitObserver& observer) {
+JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
+                   const JointFitOptions& joint, const FitObserver& observer) {
   const size_t count = data.observed.size();
   if (count < size_t(sh_count(data.lmax)) + 4)
     throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
@@ -96,39 +77,110 @@ JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, 
     throw Error("only " + std::to_string(int(100 * probe.multi_view_fraction)) +
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
-  const MapConsistentSystem system(data, options.solve_width, options.solve_height, options.ridge);
-  ProfileCache profiles(system);
-
-  // Start from the best of a coarse grid: for each R0 the channels separate, so each
-  // channel's Rd is chosen on its own.
-  std::array<double, 4> material{0.04, 0.5, 0.5, 0.5};
-  double best = INFINITY;
-  for (double R0 : {0.01, 0.02, 0.04, 0.07, 0.12, 0.2, 0.35, 0.6}) {
-    std::array<double, 4> candidate{R0, 0, 0, 0};
-    double total = 0.0;
-    const MapConsistentSystem::Profile& profile = profiles.at(R0);
-    for (int c = 0; c < 3; ++c) {
-      double channel_best = INFINITY;
-      for (double Rd : {0.02, 0.1, 0.25, 0.45, 0.65, 0.85, 1.0}) {
-        const double error = profile.squared_error(Rd, c);
-        if (error < channel_best) channel_best = error, candidate[1 + c] = Rd;
-      }
-      total += channel_best;
-    }
-    if (total < best) best = total, material = candidate;
-  }
-
-  const ceres::Solver::Summary summary = solve_material(profiles, material, max_iterations, observer);
+  CrossViewSystem cross(data, samples);
+  const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
+  const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
+  std::vector<double> grid;  // R0 from 0 to 1, finest where coats are (0.02-0.06)
+  for (double R0 : {0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05, 0.06, 0.07, 0.08, 0.1, 0.12, 0.15,
+                    0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0})
+    if (R0 >= r0_bounds.lower && R0 <= r0_bounds.upper) grid.push_back(R0);
 
   JointFit fit;
-  fit.R0 = float(material[0]);
-  fit.Rd = RGB(float(material[1]), float(material[2]), float(material[3]));
-  fit.iterations = int(summary.iterations.size()) - 1;
-  fit.converged = summary.termination_type == ceres::CONVERGENCE;
-  fit.brief_report = summary.BriefReport();
-  fit.full_report = summary.FullReport();
-  fit.rms = std::sqrt(2.0 * summary.final_cost / (3.0 * count));
+  std::string rounds;
+  auto misfit = [&](double R0) {
+    ++fit.evaluations;
+    return cross.fit(R0).cost;
+  };
+  const MapConsistentSystem system(data, options.solve_width, options.solve_height, options.ridge);
+  // Step 2 at R0: Rd per channel (see joint_fit.h); `lighting` receives the views' own
+  // lighting when that is what Rd came from.
+  auto diffuse_reflectance = [&](double R0, const Eigen::MatrixXd& d, Eigen::MatrixXd* lighting) {
+    RGB Rd;
+    if (joint.band_limited_diffuse) {
+      *lighting = cross.lighting(R0, d, 256, 128);
+      for (int c = 0; c < 3; ++c)
+        Rd[c] = float(std::clamp(d(0, c) / (kDiffuseNormalisation * (1.0 - R0) * (*lighting)(0, c)), double(rd_bounds.lower),
+                                 double(rd_bounds.upper)));
+    } else {
+      const MapConsistentSystem::Profile profile = system.profile(R0);
+      for (int c = 0; c < 3; ++c) {
+        auto channel = [&](double value) { return profile.squared_error(value, c); };
+        std::vector<double> levels;
+        for (int i = 0; i <= 20; ++i) levels.push_back(rd_bounds.lower + (rd_bounds.upper - rd_bounds.lower) * i / 20.0);
+        Rd[c] = float(minimise_on(channel, levels));
+      }
+    }
+    return Rd;
+  };
+  double R0 = 0.04;
+  Eigen::MatrixXd lighting;
+  for (int round = 0; round < joint.max_rounds; ++round) {
+    // Round 0 is plain least squares over the whole range; each later round sets the
+    // robust scale at the last R0 and searches again.
+    if (round > 0) cross.calibrate(R0);
+    const double previous = R0;
+    if (round == 0) {
+      // A start: every fourth pair is plenty for plain least squares.
+      cross.use_every(4);
+      R0 = minimise_on(misfit, grid);
+      cross.use_every(1);
+    } else {
+      // Near the last R0 (the scale changes the misfit, rarely its minimum by much); the
+      // whole grid again when the minimum is at the bracket's edge.
+      const double low = std::max(double(r0_bounds.lower), 0.8 * R0 - 0.002);
+      const double high = std::min(double(r0_bounds.upper), 1.25 * R0 + 0.002);
+      R0 = minimise_on(misfit, {low, R0, high});
+      if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid);
+    }
+    fit.iterations = round + 1;
+    const CrossViewSystem::Fit at = cross.fit(R0);
+    char line[160];
+    std::snprintf(line, sizeof line, "round %2d: R0 %.5f, robust misfit %.6g, %d evaluations so far\n", round, R0, at.cost,
+                  fit.evaluations);
+    rounds += line;
+    if (observer) {
+      FitIterate iterate;
+      iterate.iteration = round;
+      iterate.R0 = float(R0);
+      iterate.Rd = diffuse_reflectance(R0, at.d, &lighting);
+      iterate.cost = at.cost;
+      observer(iterate);
+    }
+    if (round > 0 && std::abs(R0 - previous) < 5e-5) {
+      fit.converged = true;
+      break;
+    }
+  }
+  const Eigen::MatrixXd d = cross.fit(R0).d;
+  fit.R0 = float(R0);
+  fit.Rd = diffuse_reflectance(R0, d, &lighting);
+  // The rms of the map-consistent model at the result, comparable with --mode lighting's.
+  const MapConsistentSystem::Profile profile = system.profile(R0);
+  double squared = 0.0;
+  for (int c = 0; c < 3; ++c) squared += profile.squared_error(fit.Rd[c], c);
+  fit.rms = std::sqrt(squared / (3.0 * count));
   fit.lighting = fit_lighting(data, fit.R0, fit.Rd, options);
+  // With a band-limited diffuse term L_lm is the diffuse field's: d / (21/(20 pi) (1 - R0)
+  // Rd), exact where d is, and consistent with Rd when Rd met its bound (a matte coat,
+  // where the views' mirror estimates leave much of the sphere unseen); for a black
+  // channel, the views' mirror estimates.
+  if (joint.band_limited_diffuse) {
+    for (int c = 0; c < 3; ++c) {
+      const double per_L = kDiffuseNormalisation * (1.0 - R0) * fit.Rd[c];
+      for (int i = 0; i < lighting.rows(); ++i)
+        fit.lighting.coefficients.values[i][c] = per_L > 1e-3 ? d(i, c) / per_L : lighting(i, c);
+    }
+  }
+
+  const std::string method = joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
+                                                        : "the map-consistent lighting solve (full-band diffuse)";
+  fit.brief_report = "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) +
+                     " evaluations over " + std::to_string(cross.pair_count()) + " view pairs, " +
+                     (fit.converged ? "converged" : "NOT converged") + "; Rd from " + method;
+  fit.full_report = "Joint fit (inverse/joint_fit.h)\n" + std::to_string(cross.pair_count()) +
+                    " sample pairs between views; R0 from their robust misfit, searched on [" +
+                    std::to_string(r0_bounds.lower) + ", " + std::to_string(r0_bounds.upper) + "]:\n" + rounds +
+                    "Rd from " + method + "\n" + fit.brief_report + "\n";
   return fit;
 }
 

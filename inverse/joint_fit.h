@@ -1,20 +1,31 @@
-// joint_fit.h: material and lighting together (DESIGN §5, paper section 7): an outer
-// Ceres bounded nonlinear least squares over R0 and RGB Rd; inside, the lighting
-// recovery of lighting_fit.h (the map-consistent solve); the residual is the
-// least-squares misfit between that model and the observations.
+// joint_fit.h: material and lighting together (DESIGN §5, paper section 7).
 //
 // Why the scale is determined: the mirror term is F(n.v) L(r) with F = R0 + (1 - R0)
-// (1 - n.v)^5 fixed in shape by R0 alone, and every direction of the coarse map is seen
-// by several samples at different n.v (several views, a pixel's worth of normals). A
-// lighting scaled by s would need F / s at every n.v at once, which no R0 gives; so the
-// Fresnel-weighted coat pins the lighting's absolute scale, and with it Rd. (A
-// Lambertian or microfacet fit has no such anchor: brighter light and darker paint
-// look the same.) The map is solved at a resolution coarser than the samples for
-// exactly this reason: one texel, many samples.
+// (1 - n.v)^5 fixed in shape by R0 alone, and every direction is reflected towards
+// several views at different n.v. A lighting scaled by s would need F / s at every n.v
+// at once, which no R0 gives: near grazing the coat is a mirror of strength ~1 whatever
+// R0 is. So the Fresnel-weighted coat pins R0, with it the lighting's absolute scale,
+// and with that Rd. (A Lambertian or microfacet fit has no such anchor: brighter light
+// and darker paint look the same.)
+//
+// The fit, in two steps:
+// 1. R0 and the diffuse field d = 21/(20 pi) (1 - R0) Rd L_lm, from the views' agreement
+//    (cross_view.h): the lighting is eliminated between views, not discretised, so no
+//    representation error enters. The misfit, minimised over d (linear), is a function
+//    of R0 alone: a bounded one-dimensional search (a grid, then Brent's method), in
+//    rounds that re-estimate the robust scale until R0 settles.
+// 2. Rd per channel, in closed form at that R0: the lighting's absolute level against d.
+//    When the captures' diffuse term is band-limited at the fit's lmax (glaze's `sh`
+//    integrator), the level is L_00 of the views' own mirror estimates (o - c.d) / F,
+//    which is then exact. Otherwise (photographs, the path tracer: the diffuse term has
+//    every band) the unmodelled bands, divided by F ~ R0 near the normal, would bias that
+//    estimate; there Rd minimises the map-consistent lighting solve's misfit
+//    (lighting_fit.h), which weights the mirror by F^2.
 #pragma once
 
 #include "inverse/fit_progress.h"
 #include "inverse/lighting_fit.h"
+#include "inverse/samples.h"
 
 #include <string>
 
@@ -24,15 +35,23 @@ struct JointFit {
   float R0 = 0.0f;
   RGB Rd = RGB::Zero();
   LightingFit lighting;  // at the recovered material
-  int iterations = 0;
+  int iterations = 0;    // rounds of step 1 (robust scale, then the search for R0)
+  int evaluations = 0;   // of the robust misfit
   bool converged = false;
   double rms = 0.0;  // of the map-consistent model over samples and channels
   std::string brief_report, full_report;
 };
 
+struct JointFitOptions {
+  int max_rounds = 20;
+  // The captures' diffuse term is band-limited at the fit's lmax (see above).
+  bool band_limited_diffuse = false;
+};
+
 // Throws glaze::Error when the views leave the problem unconstrained (too few samples,
-// or fewer than half of the reflected directions seen from two or more views).
-JointFit fit_joint(const LightingData& data, const LightingFitOptions& options, int max_iterations,
-                   const FitObserver& observer = {});
+// point samples, fewer than half of the reflected directions seen from two or more
+// views).
+JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
+                   const JointFitOptions& joint, const FitObserver& observer = {});
 
 }  // namespace glaze

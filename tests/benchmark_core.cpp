@@ -2,6 +2,7 @@
 // Reported in issue notes: SH projection of a 1024x512 map at lmax 4, 10M environment
 // samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline.
 #include "inverse/capture_scene.h"
+#include "inverse/joint_fit.h"
 #include "inverse/material_fit.h"
 #include "inverse/samples.h"
 #include "inverse/texture_fit.h"
@@ -163,6 +164,26 @@ void BM_TextureFit4x512(benchmark::State& state) {
   fit_benchmark(state, benchmark_captures("textured_sphere_office", "novel_0,novel_1"), 256);
 }
 BENCHMARK(BM_TextureFit4x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The issue-6 figure: the joint fit (samples, shading rows, the views' pairing, R0, Rd and
+// the lighting at them; not the re-renders) on three sh-rendered 512x512 views of the
+// white sphere, as `invert-fit --mode joint` runs it on them.
+void BM_JointFit3x512(benchmark::State& state) {
+  const CaptureSet captures = read_transforms(benchmark_captures("white_sphere_office", "novel_0,novel_1"));
+  const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  const RayTracer tracer(scene);
+  LightingFitOptions options;
+  options.solve_width = 128, options.solve_height = 64;
+  JointFitOptions joint;
+  joint.band_limited_diffuse = true;
+  const int footprint = captures.renderer.value("ss", 1);
+  for (auto _ : state) {
+    const SampleSet set = collect_samples(captures, tracer, scene, {});
+    const LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
+    benchmark::DoNotOptimize(fit_joint(data, set, options, joint));
+  }
+}
+BENCHMARK(BM_JointFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
 }  // namespace glaze

@@ -233,26 +233,60 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
   EXPECT_LT(read_json(dir.file("matte/fit/fit.json"))["reference_L_lm_error_l2"].get<double>(), 0.03);
 }
 
-// --mode joint on the white sphere in the office (noise-free, 512x512): R0 and the
-// lighting's absolute scale come out right; Rd is within 0.02, short of the 0.003 the
-// issue asks for (the piecewise-constant solve map's model error; see the README).
-TEST(InvertFitJoint, WhiteSphereRecoversR0AndTheLightingScale) {
+// --mode joint on noise-free captures (the sh integrator at ss 1, 256x256, three views)
+// against the issue's bounds: R0 within 0.001, Rd within 0.003, the lighting's absolute
+// scale (recovered over true L00) within 3% and L_lm (l <= 2) within 3% of L00.
+// Measured: R0 within 0.0001 everywhere; Rd within 0.0011 in the rooms, 0.0028 under
+// St Fagans (the red sphere's red channel) and 0.0005 under Lebombo; scale within 0.3%.
+void expect_joint_bounds(const TemporaryDirectory& dir, const std::string& scene, const std::string& environment) {
+  const std::string folder = captures(dir, scene, "joint", "--integrator sh --ss 1 --res 256x256 --holdout novel_0,novel_1 " + environment);
+  const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
+  const nlohmann::json& truth = result["reference_material"];
+  EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
+  EXPECT_TRUE(result["band_limited_diffuse"].get<bool>());
+  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.003) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
+  }
+  EXPECT_LT(result["reference_L_lm_error_l2"].get<double>(), 0.03);
+  std::filesystem::remove_all(folder);
+}
+
+TEST(InvertFitJoint, NoiseFreeRoomsMeetTheBounds) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, "white_sphere_office.gltf", "joint", "--integrator sh --ss 1 --res 512x512 --holdout novel_0,novel_1");
+  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf", "red_sphere_blue_room.gltf",
+                            "white_sphere_blue_room.gltf"}) {
+    SCOPED_TRACE(scene);
+    expect_joint_bounds(dir, scene, "");
+  }
+}
+
+TEST(InvertFitJoint, NoiseFreeRealMapsMeetTheBounds) {
+  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr"}) {
+    GLAZE_REQUIRE_ENVMAP(map, name);
+    TemporaryDirectory dir;
+    for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
+      SCOPED_TRACE(std::string(name) + " " + scene);
+      expect_joint_bounds(dir, scene, "--env " + map.string());
+    }
+  }
+}
+
+// The joint fit's view pairing (inverse/cross_view.h) on small noise-free captures (64x64:
+// quick enough to run under the sanitizers too): R0 from the views' agreement within
+// 0.001, Rd and the scale from the lighting at that R0 within 0.02 and 3%. Measured:
+// R0 -0.00002, Rd +0.009 +0.008 +0.005, scale 0.987.
+TEST(CrossView, SmallCapturesRecoverR0) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "white_sphere_office.gltf", "small", "--integrator sh --ss 1 --res 64x64");
   const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
   const nlohmann::json& truth = result["reference_material"];
   EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
   for (int c = 0; c < 3; ++c) {
-    // Measured: Rd within 0.005 and the scale within 0.7% (the issue asks 0.003 and 3%;
-    // other scenes are further off, see the README).
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.008) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.01) << "channel " << c;
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.02) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
   }
-  std::printf("joint: R0 %+.4f, Rd %+.4f %+.4f %+.4f against the truth; lighting scale %.4f %.4f %.4f\n",
-              result["R0"].get<double>() - truth["R0"].get<double>(), result["Rd"][0].get<double>() - truth["Rd"][0].get<double>(),
-              result["Rd"][1].get<double>() - truth["Rd"][1].get<double>(), result["Rd"][2].get<double>() - truth["Rd"][2].get<double>(),
-              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
-              result["reference_scale"][2].get<double>());
 }
 
 TEST(InvertFitLighting, BadInputIsReported) {

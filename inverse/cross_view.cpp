@@ -1,0 +1,333 @@
+#include "inverse/cross_view.h"
+
+#include "renderer/error.h"
+#include "renderer/latlong.h"
+#include "renderer/material.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+namespace glaze {
+namespace {
+
+// Pairs are summed in fixed chunks added in order: the profile does not depend on the
+// thread count.
+constexpr size_t kChunk = 4096;
+
+}  // namespace
+
+// A view's samples as a triangle mesh over the directions they reflect: two triangles per
+// 2 x 2 block of pixels whose samples all exist, binned in a lat-long grid of directions
+// so that the triangle around a direction is found among a few.
+class ReflectedMesh {
+ public:
+  ReflectedMesh(const LightingData& data, const SampleSet& set, const std::vector<uint32_t>& members) : data_(data) {
+    start_.assign(kRows * kColumns + 1, 0);
+    if (members.empty()) return;  // a view that does not see the object
+    int x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN, y1 = INT32_MIN;
+    for (uint32_t k : members) {
+      const Vec2& film = set.samples[k].film;
+      x0 = std::min(x0, int(film.x())), y0 = std::min(y0, int(film.y()));
+      x1 = std::max(x1, int(film.x())), y1 = std::max(y1, int(film.y()));
+    }
+    x0_ = x0, y0_ = y0;
+    const int w = width_ = x1 - x0 + 1, h = height_ = y1 - y0 + 1;
+    grid_.assign(size_t(w) * h, -1);
+    for (uint32_t k : members) {
+      const Vec2& film = set.samples[k].film;
+      grid_[size_t(int(film.y()) - y0) * w + (int(film.x()) - x0)] = k;
+    }
+    for (int j = 0; j + 1 < h; ++j)
+      for (int i = 0; i + 1 < w; ++i) {
+        const int64_t a = grid_[size_t(j) * w + i], b = grid_[size_t(j) * w + i + 1];
+        const int64_t c = grid_[size_t(j + 1) * w + i + 1], e = grid_[size_t(j + 1) * w + i];
+        if (a >= 0 && b >= 0 && c >= 0) triangles_.push_back({uint32_t(a), uint32_t(b), uint32_t(c)});
+        if (a >= 0 && c >= 0 && e >= 0) triangles_.push_back({uint32_t(a), uint32_t(c), uint32_t(e)});
+      }
+    // Bin each triangle into the cells its vertices' (u, v) box covers (u unwrapped
+    // around the first vertex; a box wider than a quarter turn, or touching a pole row,
+    // takes whole rows), padded by half a cell for the bulge of its great-circle edges.
+    std::vector<std::pair<uint32_t, uint32_t>> entries;  // (cell, triangle)
+    for (uint32_t t = 0; t < triangles_.size(); ++t) {
+      float u_low = 0, u_high = 0, v_low = 1, v_high = 0, u_first = 0;
+      for (int corner = 0; corner < 3; ++corner) {
+        const Vec2 uv = direction_to_latlong(data_.reflected[triangles_[t][corner]]);
+        float u = uv.x();
+        if (corner == 0) u_first = u, u_low = u_high = u;
+        if (u - u_first > 0.5f) u -= 1.0f;
+        if (u_first - u > 0.5f) u += 1.0f;
+        u_low = std::min(u_low, u), u_high = std::max(u_high, u);
+        v_low = std::min(v_low, uv.y()), v_high = std::max(v_high, uv.y());
+      }
+      const int row_low = std::max(0, int(std::floor(v_low * kRows - 0.5f)));
+      const int row_high = std::min(kRows - 1, int(std::floor(v_high * kRows + 0.5f)));
+      const bool whole_rows = u_high - u_low > 0.25f || row_low == 0 || row_high == kRows - 1;
+      const int column_low = int(std::floor(u_low * kColumns - 0.5f)), column_high = int(std::floor(u_high * kColumns + 0.5f));
+      for (int row = row_low; row <= row_high; ++row) {
+        if (whole_rows) {
+          for (int column = 0; column < kColumns; ++column) entries.emplace_back(row * kColumns + column, t);
+          continue;
+        }
+        for (int column = column_low; column <= column_high; ++column)
+          entries.emplace_back(row * kColumns + ((column % kColumns) + kColumns) % kColumns, t);
+      }
+    }
+    std::sort(entries.begin(), entries.end());
+    for (const auto& [cell, triangle] : entries) ++start_[cell + 1];
+    for (size_t cell = 0; cell < size_t(kRows) * kColumns; ++cell) start_[cell + 1] += start_[cell];
+    members_.reserve(entries.size());
+    for (const auto& entry : entries) members_.push_back(entry.second);
+  }
+
+  // The samples at the four pixels beside film point `film` of this view.
+  template <typename Visit>
+  void for_each_neighbour(const Vec2& film, Visit&& visit) const {
+    const int i = int(film.x()) - x0_, j = int(film.y()) - y0_;
+    for (const auto& [di, dj] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)}) {
+      if (i + di < 0 || i + di >= width_ || j + dj < 0 || j + dj >= height_) continue;
+      const int64_t k = grid_[size_t(j + dj) * width_ + (i + di)];
+      if (k >= 0) visit(uint32_t(k));
+    }
+  }
+
+  // The triangle whose directions contain `r`, and r's barycentric weights in it (the
+  // central projection onto its plane); false when no triangle of this view does.
+  bool locate(const Vec3& r, std::array<uint32_t, 3>& corners, std::array<float, 3>& weights, double* area = nullptr) const {
+    const Vec2 uv = direction_to_latlong(r);
+    const int cell = texel_of(uv, kColumns, kRows);
+    for (uint32_t i = start_[cell]; i < start_[cell + 1]; ++i) {
+      const std::array<uint32_t, 3>& t = triangles_[members_[i]];
+      const Eigen::Vector3d A = data_.reflected[t[0]].cast<double>(), B = data_.reflected[t[1]].cast<double>(),
+                            C = data_.reflected[t[2]].cast<double>(), R = r.cast<double>();
+      const double det = A.dot(B.cross(C));
+      if (!(std::abs(det) > 1e-18)) continue;
+      const double a = R.dot(B.cross(C)) / det, b = A.dot(R.cross(C)) / det, c = A.dot(B.cross(R)) / det;
+      constexpr double kSlack = -1e-7;
+      if (a < kSlack || b < kSlack || c < kSlack) continue;
+      const double sum = a + b + c;
+      if (!(sum > 0.0)) continue;
+      corners = t;
+      weights = {float(a / sum), float(b / sum), float(c / sum)};
+      if (area) *area = 0.5 * (B - A).cross(C - A).norm();
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  static constexpr int kColumns = 256, kRows = 128;
+  const LightingData& data_;
+  int x0_ = 0, y0_ = 0, width_ = 0, height_ = 0;
+  std::vector<int64_t> grid_;  // pixel -> sample, -1 where none
+  std::vector<std::array<uint32_t, 3>> triangles_;
+  std::vector<uint32_t> start_, members_;
+};
+
+CrossViewSystem::~CrossViewSystem() = default;
+
+CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples)
+    : data_(data), n_(int(data.cc.rows())) {
+  if (!samples.pixels) throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
+  const int views = int(samples.per_frame.size());
+  std::vector<std::vector<uint32_t>> members(views);
+  for (uint32_t k = 0; k < samples.samples.size(); ++k) members[samples.samples[k].frame].push_back(k);
+  meshes_.reserve(views);
+  for (int f = 0; f < views; ++f) meshes_.emplace_back(data, samples, members[f]);
+  // Per sample, its pairs with every other view, gathered in parallel and kept in sample
+  // order.
+  const size_t count = samples.samples.size();
+  std::vector<std::vector<Pair>> found(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    const int own = samples.samples[k].frame;
+    for (int f = 0; f < views; ++f) {
+      if (f == own) continue;
+      Pair p;
+      p.sample = uint32_t(k);
+      if (meshes_[f].locate(data.reflected[k], p.near, p.weight)) found[k].push_back(p);
+    }
+  });
+  for (const std::vector<Pair>& list : found) pairs_.insert(pairs_.end(), list.begin(), list.end());
+  if (pairs_.empty())
+    throw Error("no direction is reflected towards two views: material and lighting cannot be separated; the joint "
+                "fit needs views from several directions");
+  // The noise model: a pixel's noise is proportional to its level (measured on glaze's
+  // path-traced captures: 5% of the value at 256 spp, in smooth and in detailed parts
+  // alike), taken from its four neighbours so that a sample's own noise does not set
+  // its weight, with a floor of 1% of the mean observation.
+  RGBd mean = RGBd::Zero();
+  for (const RGB& o : data.observed) mean += o.cast<double>();
+  const RGBd floor = (0.01 * mean / double(count)).max(1e-12);
+  variance_.resize(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    RGBd level = RGBd::Zero();
+    int neighbours = 0;
+    meshes_[samples.samples[k].frame].for_each_neighbour(samples.samples[k].film, [&](uint32_t j) {
+      level += data.observed[j].cast<double>();
+      ++neighbours;
+    });
+    level = neighbours > 0 ? RGBd(level / neighbours) : data.observed[k].cast<double>();
+    variance_[k] = (level.abs() + floor).square().cast<float>();
+  });
+}
+
+void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::VectorXd> x, Eigen::Ref<Eigen::Vector3d> y,
+                                 Eigen::Ref<Eigen::Vector3d> weight) const {
+  // o_a - c_a.d - F_a sum_j w_j (o_j - c_j.d) / F_j = y - x.d: its noise variance is
+  // v_a + sum_j (F_a w_j / F_j)^2 v_j (the lighting eliminated between two independent
+  // observations), and its weight the inverse of that.
+  const double Fa = schlick_fresnel(R0, double(data_.mu[p.sample]));
+  x = Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(p.sample) * n_], n_).cast<double>();
+  y = data_.observed[p.sample].cast<double>().matrix();
+  Eigen::Vector3d variance = variance_[p.sample].cast<double>().matrix();
+  for (int i = 0; i < 3; ++i) {
+    const uint32_t j = p.near[i];
+    const double ratio = Fa * p.weight[i] / std::max(schlick_fresnel(R0, double(data_.mu[j])), 1e-30);
+    x -= ratio * Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(j) * n_], n_).cast<double>();
+    y -= ratio * data_.observed[j].cast<double>().matrix();
+    variance += ratio * ratio * variance_[j].cast<double>().matrix();
+  }
+  weight = variance.cwiseInverse();
+}
+
+Eigen::MatrixXd CrossViewSystem::solve(double R0, const Eigen::MatrixXd* reweight_at, double c2) const {
+  const size_t used = (pairs_.size() + stride_ - 1) / stride_;
+  const size_t chunks = (used + kChunk - 1) / kChunk;
+  struct Sums {
+    std::array<Eigen::MatrixXd, 3> xx;
+    Eigen::MatrixXd xy;
+  };
+  std::vector<Sums> partial(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
+    const size_t first = chunk * kChunk, rows = std::min(used, first + kChunk) - first;
+    Eigen::MatrixXd X(n_, rows), Y(rows, 3), W(rows, 3);
+    Eigen::Vector3d y, weight;
+    for (size_t r = 0; r < rows; ++r) {
+      pair_terms(pairs_[(first + r) * stride_], R0, X.col(r), y, weight);
+      double robust = 1.0;
+      if (reweight_at) robust = 1.0 / (1.0 + (y - reweight_at->transpose() * X.col(r)).cwiseAbs2().dot(weight) / (3.0 * c2));
+      W.row(r) = robust * weight.transpose();
+      Y.row(r) = y.transpose();
+    }
+    Sums& s = partial[chunk];
+    s.xy.resize(n_, 3);
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::MatrixXd weighted = X * W.col(c).asDiagonal();
+      s.xx[c].noalias() = weighted * X.transpose();
+      s.xy.col(c).noalias() = weighted * Y.col(c);
+    }
+  });
+  Eigen::MatrixXd d(n_, 3);
+  for (int c = 0; c < 3; ++c) {
+    Eigen::MatrixXd xx = Eigen::MatrixXd::Zero(n_, n_);
+    Eigen::VectorXd xy = Eigen::VectorXd::Zero(n_);
+    for (const Sums& s : partial) xx += s.xx[c], xy += s.xy.col(c);
+    // A whisper of ridge keeps d finite for views that leave part of it unseen.
+    xx.diagonal().array() += 1e-9 * std::max(xx.diagonal().mean(), 1e-300);
+    d.col(c) = xx.ldlt().solve(xy);
+  }
+  return d;
+}
+
+std::vector<double> CrossViewSystem::normalised_residuals(double R0, const Eigen::MatrixXd& d) const {
+  std::vector<double> squared((pairs_.size() + stride_ - 1) / stride_);
+  tbb::parallel_for(size_t(0), squared.size(), [&](size_t p) {
+    Eigen::VectorXd x(n_);
+    Eigen::Vector3d y, weight;
+    pair_terms(pairs_[p * stride_], R0, x, y, weight);
+    squared[p] = (y - d.transpose() * x).cwiseAbs2().dot(weight) / 3.0;
+  });
+  return squared;
+}
+
+// Cauchy's loss at 2.385 robust standard deviations (95% efficiency for Gaussian noise).
+constexpr double kCauchy = 2.385;
+
+CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
+  Fit result;
+  if (!std::isfinite(scale_)) {  // not calibrated yet: plain least squares
+    result.d = solve(R0, nullptr, 0.0);
+    for (double z : normalised_residuals(R0, result.d)) result.cost += z;
+    return result;
+  }
+  const double c2 = kCauchy * kCauchy * scale_ * scale_;
+  // Iteratively reweighted: each solve weighs the pairs by the residuals of the last.
+  constexpr int kReweightings = 3;
+  result.d = solve(R0, nullptr, c2);
+  for (int iteration = 1; iteration < kReweightings; ++iteration) result.d = solve(R0, &result.d, c2);
+  const std::vector<double> squared = normalised_residuals(R0, result.d);
+  for (double z : squared) result.cost += 0.5 * c2 * std::log1p(z / c2);
+  return result;
+}
+
+void CrossViewSystem::calibrate(double R0) {
+  // The scale from the least-squares residuals, then again from the robust fit's.
+  auto median_magnitude = [&](const Eigen::MatrixXd& fitted) {
+    std::vector<double> magnitude = normalised_residuals(R0, fitted);
+    for (double& z : magnitude) z = std::sqrt(z);
+    std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
+    return std::max(1.4826 * magnitude[magnitude.size() / 2], 1e-30);
+  };
+  scale_ = INFINITY;
+  scale_ = median_magnitude(fit(R0).d);
+  scale_ = median_magnitude(fit(R0).d);
+}
+
+Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, int width, int height, double* seen) const {
+  const int lmax = data_.lmax;
+  std::vector<Eigen::MatrixXd> rows(height);
+  std::vector<Eigen::MatrixXd> unseen_rows(height);
+  std::vector<double> seen_area(height, 0.0);
+  tbb::parallel_for(0, height, [&](int j) {
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n_, 3), unseen = Eigen::MatrixXd::Zero(n_, n_);
+    std::vector<float> basis(n_);
+    const double solid_angle = 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
+    for (int i = 0; i < width; ++i) {
+      const Vec3 direction = latlong_to_direction(Vec2((i + 0.5f) / width, (j + 0.5f) / height));
+      Eigen::Vector3d estimate = Eigen::Vector3d::Zero();
+      double total = 0.0;
+      std::array<uint32_t, 3> near;
+      std::array<float, 3> weight;
+      for (const ReflectedMesh& mesh : meshes_) {
+        double area = 0.0;
+        if (!mesh.locate(direction, near, weight, &area)) continue;
+        Eigen::Vector3d light = Eigen::Vector3d::Zero();
+        double F = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t s = near[k];
+          const double Fs = std::max(schlick_fresnel(R0, double(data_.mu[s])), 1e-30);
+          const Eigen::VectorXd c = Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(s) * n_], n_).cast<double>();
+          light += weight[k] * (data_.observed[s].cast<double>().matrix() - d.transpose() * c) / Fs;
+          F += weight[k] * Fs;
+        }
+        // As in the lighting fit's map: where the mirror reflects under 1% (a matte coat
+        // seen near the normal) (o - c.d) / F is the diffuse model's error amplified a
+        // hundredfold, not the lighting.
+        if (F < 0.01) continue;
+        // Views combine by how finely they sample the direction: the interpolation error
+        // grows with the triangle, and a grazing view's triangles are large.
+        estimate += light / std::max(area, 1e-12);
+        total += 1.0 / std::max(area, 1e-12);
+      }
+      sh_eval<float>(lmax, direction, basis);
+      const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXf>(basis.data(), n_).cast<double>();
+      if (total > 0.0) {
+        sum += solid_angle * y * (estimate / total).transpose();
+        seen_area[j] += solid_angle;
+      } else {
+        unseen += solid_angle * y * y.transpose();
+      }
+    }
+    rows[j] = sum, unseen_rows[j] = unseen;
+  });
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n_, 3), unseen = Eigen::MatrixXd::Zero(n_, n_);
+  double area = 0.0;
+  for (int j = 0; j < height; ++j) sum += rows[j], unseen += unseen_rows[j], area += seen_area[j];
+  if (seen) *seen = area / (4.0 * kPiD);
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n_, n_);
+  return (I - unseen + 1e-9 * I).ldlt().solve(sum);
+}
+
+}  // namespace glaze

@@ -1,0 +1,95 @@
+// cross_view.h: the coat's Fresnel factor measured by comparing views (the joint fit's
+// first step, DESIGN §5).
+//
+// Each view sees the environment mirrored in the coat: sample k of a view observes
+//   o_k = F(n.v) L(r_k) + c_k . d,     d = 21/(20 pi) (1 - R0) Rd L_lm  (the diffuse field)
+// and another view sees the same direction r_k elsewhere on the object, at another n.v.
+// Interpolating the other view's samples around r_k (on its own pixel grid, the finest
+// resolution the data has) gives a second estimate of L(r_k), and
+//   o_a - c_a . d  =  F_a  sum_j w_j (o_j - c_j . d) / F_j
+// must hold for the true R0 and d whatever the lighting is: L is eliminated, not
+// discretised. For a fixed R0 this is linear in d, so the misfit profile is a function
+// of R0 alone; its minimum is the coat. (What fixes R0 is the change of F with n.v near
+// grazing, where the coat becomes a mirror of strength ~1: the lighting's absolute scale
+// comes with it.)
+//
+// Where the lighting has detail finer than the sample spacing (a window's edge, a small
+// lamp) the interpolation is wrong and the equation does not hold; such pairs are
+// outliers and a robust reweighting removes them.
+#pragma once
+
+#include "inverse/lighting_fit.h"
+#include "inverse/samples.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace glaze {
+
+class ReflectedMesh;  // cross_view.cpp
+
+class CrossViewSystem {
+ public:
+  // Pairs every sample with each other view that reflects its direction; `samples` must be
+  // pixel samples (the pixel grid is the interpolation mesh). Throws glaze::Error when no
+  // two views see a common direction.
+  CrossViewSystem(const LightingData& data, const SampleSet& samples);
+  ~CrossViewSystem();
+
+  // The robust misfit at R0 (Cauchy loss of the pair residuals, each divided by its
+  // noise), minimised over the diffuse field d by iteratively reweighted least squares.
+  struct Fit {
+    double cost = 0.0;
+    Eigen::MatrixXd d;  // per channel (columns)
+  };
+  Fit fit(double R0) const;
+
+  // Sets the robust scale from the residuals' median absolute deviation at R0 (first the
+  // least-squares fit's, then the robust fit's). Before it: least squares.
+  void calibrate(double R0);
+
+  // The lighting's SH coefficients (columns: channels) at (R0, d): each view's mirror
+  // estimates (o - c.d) / F, interpolated on its mesh at the centres of a width x height
+  // lat-long grid and combined across views by their sampling density (the inverse of
+  // the interpolating triangle's solid angle; a view where F < 0.01 is left out), integrated
+  // against Y_lm;
+  // directions no view reflects take the SH reconstruction itself (the fixed point
+  // L = sum_seen Omega Y L + sum_unseen Omega Y Y^T L). `seen` receives the fraction of the
+  // sphere's solid angle some view reflects.
+  Eigen::MatrixXd lighting(double R0, const Eigen::MatrixXd& d, int width, int height, double* seen = nullptr) const;
+
+  // Uses every stride-th pair only (1: all), for a quick first estimate.
+  void use_every(size_t stride) { stride_ = std::max<size_t>(stride, 1); }
+
+  size_t pair_count() const { return pairs_.size(); }
+
+ private:
+  struct Pair {
+    uint32_t sample;               // seen by view a
+    std::array<uint32_t, 3> near;  // the other view's samples around the same direction
+    std::array<float, 3> weight;   // their interpolation weights (sum 1)
+  };
+  // The residual's data and diffuse parts of pair p at R0, and its noise weight.
+  void pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::VectorXd> x, Eigen::Ref<Eigen::Vector3d> y,
+                  Eigen::Ref<Eigen::Vector3d> weight) const;
+  // Weighted least squares for d; pair weights: the inverse noise variance, times the
+  // Cauchy weight (scale^2 c2) of the pair's residual at `reweight_at` when given.
+  Eigen::MatrixXd solve(double R0, const Eigen::MatrixXd* reweight_at, double c2) const;
+  // Per pair, its residual's squared norm in units of its noise.
+  std::vector<double> normalised_residuals(double R0, const Eigen::MatrixXd& d) const;
+
+  const LightingData& data_;
+  int n_;
+  std::vector<ReflectedMesh> meshes_;
+  std::vector<Pair> pairs_;
+  std::vector<RGB> variance_;    // per sample and channel: the noise model
+  double scale_ = INFINITY;      // robust scale of the normalised residuals
+  size_t stride_ = 1;
+};
+
+}  // namespace glaze
