@@ -79,9 +79,9 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
     // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact
-    // for the fit's model when that is at most the fit's lmax (see joint_fit.h).
-    joint_options.band_limited_diffuse = in.captures.renderer.is_object() && in.captures.renderer.value("integrator", "") == "sh" &&
-                                         capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
+    // for the fit's model when that is at most the fit's lmax (see joint_fit.h). Other
+    // captures, or sh ones that do not say their lmax, get a band above any fit's.
+    joint_options.band_limited_diffuse = capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
     joint_fit = fit_joint(data, in.samples, options, joint_options, observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);

@@ -179,13 +179,13 @@ void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::Vec
   // v_a + sum_j (F_a w_j / F_j)^2 v_j (the lighting eliminated between two independent
   // observations), and its weight the inverse of that.
   const double Fa = schlick_fresnel(R0, double(data_.mu[p.sample]));
-  x = Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(p.sample) * n_], n_).cast<double>();
+  x = data_.c_row(p.sample).cast<double>();
   y = data_.observed[p.sample].cast<double>().matrix();
   Eigen::Vector3d variance = variance_[p.sample].cast<double>().matrix();
   for (int i = 0; i < 3; ++i) {
     const uint32_t j = p.near[i];
     const double ratio = Fa * p.weight[i] / std::max(schlick_fresnel(R0, double(data_.mu[j])), 1e-30);
-    x -= ratio * Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(j) * n_], n_).cast<double>();
+    x -= ratio * data_.c_row(j).cast<double>();
     y -= ratio * data_.observed[j].cast<double>().matrix();
     variance += ratio * ratio * variance_[j].cast<double>().matrix();
   }
@@ -283,7 +283,7 @@ Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, i
   tbb::parallel_for(0, height, [&](int j) {
     Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n_, 3), unseen = Eigen::MatrixXd::Zero(n_, n_);
     std::vector<float> basis(n_);
-    const double solid_angle = 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
+    const double solid_angle = latlong_texel_solid_angle(j, width, height);
     for (int i = 0; i < width; ++i) {
       const Vec3 direction = latlong_to_direction(Vec2((i + 0.5f) / width, (j + 0.5f) / height));
       Eigen::Vector3d estimate = Eigen::Vector3d::Zero();
@@ -298,7 +298,7 @@ Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, i
         for (int k = 0; k < 3; ++k) {
           const uint32_t s = near[k];
           const double Fs = std::max(schlick_fresnel(R0, double(data_.mu[s])), 1e-30);
-          const Eigen::VectorXd c = Eigen::Map<const Eigen::VectorXf>(&data_.c[size_t(s) * n_], n_).cast<double>();
+          const Eigen::VectorXd c = data_.c_row(s).cast<double>();
           light += weight[k] * (data_.observed[s].cast<double>().matrix() - d.transpose() * c) / Fs;
           F += weight[k] * Fs;
         }

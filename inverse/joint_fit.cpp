@@ -87,9 +87,18 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 
   JointFit fit;
   std::string rounds;
+  // The robust misfit, keeping the fit at the lowest point evaluated since `best` was
+  // last reset: the searches end there, so its diffuse field is not computed again.
+  struct {
+    double R0 = NAN;
+    CrossViewSystem::Fit fit{INFINITY, {}};
+  } best;
   auto misfit = [&](double R0) {
     ++fit.evaluations;
-    return cross.fit(R0).cost;
+    CrossViewSystem::Fit at = cross.fit(R0);
+    const double cost = at.cost;
+    if (cost < best.fit.cost) best.R0 = R0, best.fit = std::move(at);
+    return cost;
   };
   const MapConsistentSystem system(data, options.solve_width, options.solve_height, options.ridge);
   // Step 2 at R0: Rd per channel (see joint_fit.h); `lighting` receives the views' own
@@ -103,21 +112,22 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
                                  double(rd_bounds.upper)));
     } else {
       const MapConsistentSystem::Profile profile = system.profile(R0);
+      std::vector<double> levels;
+      for (int i = 0; i <= 20; ++i) levels.push_back(rd_bounds.lower + (rd_bounds.upper - rd_bounds.lower) * i / 20.0);
       for (int c = 0; c < 3; ++c) {
         auto channel = [&](double value) { return profile.squared_error(value, c); };
-        std::vector<double> levels;
-        for (int i = 0; i <= 20; ++i) levels.push_back(rd_bounds.lower + (rd_bounds.upper - rd_bounds.lower) * i / 20.0);
         Rd[c] = float(minimise_on(channel, levels));
       }
     }
     return Rd;
   };
   double R0 = 0.04;
-  Eigen::MatrixXd lighting;
+  Eigen::MatrixXd lighting, d;
   for (int round = 0; round < joint.max_rounds; ++round) {
     // Round 0 is plain least squares over the whole range; each later round sets the
     // robust scale at the last R0 and searches again.
     if (round > 0) cross.calibrate(R0);
+    best.fit.cost = INFINITY;  // the misfit changes with the scale
     const double previous = R0;
     if (round == 0) {
       // A start: every fourth pair is plenty for plain least squares.
@@ -133,7 +143,10 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid);
     }
     fit.iterations = round + 1;
-    const CrossViewSystem::Fit at = cross.fit(R0);
+    // The search's fit at R0 when it kept it (a tie can leave another point kept), and
+    // after round 0, which searched on a quarter of the pairs, the fit on all of them.
+    const CrossViewSystem::Fit at = round > 0 && best.R0 == R0 ? best.fit : cross.fit(R0);
+    d = at.d;
     char line[160];
     std::snprintf(line, sizeof line, "round %2d: R0 %.5f, robust misfit %.6g, %d evaluations so far\n", round, R0, at.cost,
                   fit.evaluations);
@@ -151,7 +164,6 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       break;
     }
   }
-  const Eigen::MatrixXd d = cross.fit(R0).d;
   fit.R0 = float(R0);
   fit.Rd = diffuse_reflectance(R0, d, &lighting);
   // The rms of the map-consistent model at the result, comparable with --mode lighting's.

@@ -148,7 +148,7 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
     const int i = index[locate(data.reflected[k], phi)];
     const double g = coat_transmittance_g(double(data.mu[k]));
     const Eigen::RowVector3d o = data.observed[k].cast<double>().matrix().transpose();
-    const Eigen::RowVectorXd c = Eigen::Map<const Eigen::RowVectorXf>(&data.c[k * n_], n_).cast<double>();
+    const Eigen::RowVectorXd c = data.c_row(k).transpose().cast<double>();
     const Eigen::Matrix3d pp = phi * phi.transpose();
     phi_phi_[i] += pp, g_phi_phi_[i] += g * pp, gg_phi_phi_[i] += g * g * pp;
     phi_o_[i] += phi * o, g_phi_o_[i] += g * phi * o;
@@ -163,7 +163,7 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   std::vector<float> basis(n_);
   for (int t = 0; t < width * height; ++t) {
     const int j = t / width;
-    const double solid_angle = 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
+    const double solid_angle = latlong_texel_solid_angle(j, width, height);
     sh_eval<float>(data.lmax, latlong_to_direction(Vec2((t % width + 0.5f) / width, (j + 0.5f) / height)), basis);
     const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXf>(basis.data(), n_).cast<double>();
     if (index[t] >= 0) P.col(index[t]) = solid_angle * y;
@@ -328,7 +328,7 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   double mirror_total = 0.0;
   const double q = 1.0 - R0;
   for (size_t k = 0; k < count; ++k) {
-    const Eigen::Map<const Eigen::VectorXf> c(&data.c[k * n], n);
+    const Eigen::Map<const Eigen::VectorXf> c = data.c_row(k);
     const Eigen::Vector3d diffuse = kDiffuseNormalisation * q * Rd.cast<double>().matrix().cwiseProduct(L.transpose() * c.cast<double>());
     const RGBd mirror = data.observed[k].cast<double>() - diffuse.array();
     const double F = schlick_fresnel(double(R0), double(data.mu[k]));

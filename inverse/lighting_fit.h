@@ -42,6 +42,12 @@ struct LightingData {
   std::vector<int> frame;
   // Fraction of a 32 x 16 lat-long grid of normal directions that samples cover.
   double normal_coverage = 0.0;
+
+  // Sample k's c.
+  Eigen::Map<const Eigen::VectorXf> c_row(size_t k) const {
+    const int n = sh_count(lmax);
+    return {&c[k * n], n};
+  }
 };
 
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,

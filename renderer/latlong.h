@@ -41,4 +41,9 @@ inline int texel_of(const Vec2& uv, int width, int height) {
   return static_cast<int>(j) * width + static_cast<int>(i);
 }
 
+// The exact solid angle of a texel in row j of a width x height lat-long map.
+inline double latlong_texel_solid_angle(int j, int width, int height) {
+  return 2.0 * kPiD / width * (std::cos(kPiD * j / height) - std::cos(kPiD * (j + 1) / height));
+}
+
 }  // namespace glaze

@@ -83,7 +83,9 @@ TEST(AliasTable, TableSelectsEachOutcomeWithItsPmfEvenForExtremeWeights) {
       pmf_sum += table.pmf(i);
       ASSERT_NEAR(p, weights[i] / total, 1e-6 * weights[i] / total + 1e-12) << "n " << n << " i " << i;
       ASSERT_NEAR(table.pmf(i), weights[i] / total, 1e-6 * weights[i] / total + 1e-30) << "n " << n << " i " << i;
-      if (weights[i] == 0.0f) ASSERT_EQ(p, 0.0) << "n " << n << " i " << i;
+      if (weights[i] == 0.0f) {
+        ASSERT_EQ(p, 0.0) << "n " << n << " i " << i;
+      }
     }
     EXPECT_NEAR(pmf_sum, 1.0, 1e-5) << "n " << n;
   }
