@@ -69,6 +69,8 @@ options of `render`:
   --integrator sh     the analytic SH shading model (DESIGN section 2), no noise:
     --lmax N          SH band limit of the diffuse term (default 4)
     --ss K            K x K sub-pixel samples (default 2)
+    --ss-refine M     M x M where a pixel's K x K samples differ by over 1%
+                      (edges, silhouettes; default 0: off; not with --captures)
 
   --out FILE.png      a picture instead of radiance: --exposure EV (default 0)
                       and --tone-map clamp|filmic|aces (default filmic), as the
@@ -130,12 +132,14 @@ options of `reproduce`:
 options of `convergence` (also --res, --seed, --threads, --max-depth, --env...):
   --ref-spp N         path-trace the reference at N spp, in two halves whose
                       difference measures its noise (default 16384)
-  --ref FILE.exr      use this reference instead (its noise is then unknown)
+  --ref FILE.exr      use this reference instead, with --ref-noise X its relative
+                      noise as summary.json of the run that made it says (default 0)
   --max-spp N         path tracer at 1, 2, 4, ... N spp (default ref-spp / 16)
   Writes DIR/convergence.csv (seconds, relative RMSE, max error, RMSE beyond the
   reference noise), split.csv (sh error from SH truncation and from anti-aliasing,
   kernel energy kept per lmax), summary.json (time to 1% and 0.3%) and
-  convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12 x ss 1, 2, 4.
+  convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12 x ss 1, 2, 4, and ss 1
+  and 2 refined to 8 (--ss-refine 8).
 )";
 
 EnvironmentOptions environment_options(const Arguments& args) {

@@ -74,6 +74,10 @@ struct Job {
       metadata["glaze:lmax"] = std::to_string(sh->lmax);
       metadata["glaze:ss"] = std::to_string(sh->supersampling);
       summary = "sh, lmax " + std::to_string(sh->lmax) + ", ss " + std::to_string(sh->supersampling);
+      if (sh->refined_supersampling > 0) {
+        metadata["glaze:ss_refined"] = std::to_string(sh->refined_supersampling);
+        summary += " refined " + std::to_string(sh->refined_supersampling);
+      }
     } else {
       RenderResult result = render(tracer, camera, options);
       image = std::move(result.image);
@@ -160,13 +164,18 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 
 int command_render(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"camera", "res", "spp", "time-budget", "seed", "threads", "integrator", "max-depth", "env",
-                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss", "exposure",
+                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss", "ss-refine", "exposure",
                              "tone-map"});
   if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
     throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
   const std::string integrator = args.text("integrator", "path");
   if (integrator != "path" && integrator != "sh") throw Error("unknown integrator '" + integrator + "' (known: path, sh)");
-  if (integrator != "sh" && (args.has("lmax") || args.has("ss"))) throw Error("--lmax and --ss apply to --integrator sh");
+  if (integrator != "sh" && (args.has("lmax") || args.has("ss") || args.has("ss-refine")))
+    throw Error("--lmax, --ss and --ss-refine apply to --integrator sh");
+  // A capture set's pixels must have the one K x K footprint that the fits model
+  // (invert-fit --pixel-footprint).
+  if (args.has("ss-refine") && args.has("captures"))
+    throw Error("--ss-refine makes pixels' footprints differ, which the fits do not model: leave it out with --captures");
   if (integrator == "sh" && (args.has("spp") || args.has("time-budget") || args.has("estimator") || args.has("max-depth")))
     throw Error("--spp, --time-budget, --estimator and --max-depth apply to --integrator path");
   if (args.has("holdout") && !args.has("captures")) throw Error("--holdout applies to --captures");
@@ -199,6 +208,7 @@ int command_render(const std::vector<std::string>& raw) {
     sh.emplace();
     sh->lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
     sh->supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
+    sh->refined_supersampling = static_cast<int>(args.integer("ss-refine", 0, 0, 64));
     sh->black_background = args.has("captures");
     sh->threads = options.threads;
   }

@@ -605,7 +605,8 @@ void Reproduction::report() const {
       if (entry.contains("resolvable") && !entry["resolvable"].get<bool>()) md << "not resolvable at this reference's noise\n";
       else if (entry["sh_seconds"].is_number())
         md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, sh " << fixed(entry["sh_seconds"].get<double>(), 4) << " s ("
-           << entry["sh_setting"].get<std::string>() << "): " << fixed(entry["speedup"].get<double>(), 0) << "x\n";
+           << entry["sh_setting"].get<std::string>() << "): " << fixed(entry["speedup"].get<double>(), 0) << "x, "
+           << fixed(entry["speedup_projection_cached"].get<double>(), 0) << "x with the SH projection cached\n";
       else md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, no sh setting reaches it\n";
     }
     md << "\n![error against run time](convergence/convergence.png)\n\n";

@@ -50,7 +50,8 @@ class CrossViewSystem {
   Fit fit(double R0) const;
 
   // Sets the robust scale from the residuals' median absolute deviation at R0 (first the
-  // least-squares fit's, then the robust fit's). Before it: least squares.
+  // least-squares fit's, then the robust fit's; at least 0.1% of the noise model). Before it:
+  // least squares.
   void calibrate(double R0);
 
   // The lighting's SH coefficients (columns: channels) at (R0, d): each view's mirror

@@ -121,7 +121,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
     }
     return Rd;
   };
-  double R0 = 0.04;
+  double R0 = 0.04, last_step = INFINITY;
   Eigen::MatrixXd lighting, d;
   for (int round = 0; round < joint.max_rounds; ++round) {
     // Round 0 is plain least squares over the whole range; each later round sets the
@@ -135,11 +135,14 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       R0 = minimise_on(misfit, grid);
       cross.use_every(1);
     } else {
-      // Near the last R0 (the scale changes the misfit, rarely its minimum by much); the
-      // whole grid again when the minimum is at the bracket's edge.
-      const double low = std::max(double(r0_bounds.lower), 0.8 * R0 - 0.002);
-      const double high = std::min(double(r0_bounds.upper), 1.25 * R0 + 0.002);
-      R0 = minimise_on(misfit, {low, R0, high});
+      // Near the last R0 (the scale changes the misfit, rarely its minimum by much): after
+      // round 0's least squares within 25%, later within four times the last round's
+      // step (at least 2%), five points and Brent's method between the best one's
+      // neighbours; the whole grid again when the minimum is at the bracket's edge.
+      const double reach = round == 1 ? 0.25 * R0 + 0.002 : std::max(4.0 * last_step, 0.02 * R0 + 0.0005);
+      const double low = std::max(double(r0_bounds.lower), R0 - reach);
+      const double high = std::min(double(r0_bounds.upper), R0 + reach);
+      R0 = minimise_on(misfit, {low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high});
       if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid);
     }
     fit.iterations = round + 1;
@@ -159,7 +162,8 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       iterate.cost = at.cost;
       observer(iterate);
     }
-    if (round > 0 && std::abs(R0 - previous) < 5e-5) {
+    last_step = std::abs(R0 - previous);
+    if (round > 0 && last_step < 5e-5) {
       fit.converged = true;
       break;
     }

@@ -6,7 +6,8 @@
 // per sub-pixel sample: one ray cast through the scene's Embree geometry, one
 // environment lookup along the mirror direction, and the SH diffuse sum. No Monte-Carlo
 // noise: K x K sub-pixel samples (centres of a K x K grid, box filter) only against
-// aliasing at silhouettes and in sharp reflections. It is exact for a single convex
+// aliasing at silhouettes and in sharp reflections, optionally M x M where those K x K
+// disagree (the few pixels with an edge in them get the samples). It is exact for a single convex
 // object under distant light up to the SH truncation of the diffuse term; elsewhere it
 // ignores occlusion and interreflection (glaze warns). Where the truncated diffuse sum
 // rings below zero (far from a point-like light) it is clamped at zero.
@@ -26,6 +27,12 @@ struct ShIntegratorOptions {
   bool black_background = false;  // camera rays that miss return 0
   int threads = 0;                // 0: all cores
   bool clamp_diffuse = true;      // clamp a negative (ringing) diffuse sum at zero
+  // M > K: a pixel where the K x K samples' luminance bends by more than refine_contrast
+  // of the pixel's (a second difference on the lattice of samples: a silhouette, the edge
+  // of a reflected light; not a smooth gradient, which K x K averages exactly) is
+  // rendered again with M x M samples, which replace its K x K ones. 0: off.
+  int refined_supersampling = 0;
+  float refine_contrast = 0.05f;
 };
 
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,

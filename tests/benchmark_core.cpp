@@ -124,6 +124,20 @@ void BM_ShIntegratorFrame512(benchmark::State& state) {
 }
 BENCHMARK(BM_ShIntegratorFrame512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The same frame at ss 2 refined to 8 x 8 where a pixel's 2 x 2 samples disagree
+// (`glaze convergence` measures what that buys in error).
+void BM_ShIntegratorFrame512Refined(benchmark::State& state) {
+  const Scene scene = load_scene(std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf");
+  const Environment env(office_map(), {});
+  const RayTracer tracer(scene);
+  const PinholeCamera camera = scene.make_camera(scene.cameras.front(), std::pair(512, 512));
+  ShIntegratorOptions options{4, 2, true, 0};
+  options.refined_supersampling = 8;
+  render_sh(scene, tracer, env, camera, options);
+  for (auto _ : state) benchmark::DoNotOptimize(render_sh(scene, tracer, env, camera, options));
+}
+BENCHMARK(BM_ShIntegratorFrame512Refined)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // The issue-5 figures: the fit pipeline of `invert-fit` (samples, shading terms, the
 // nested fit; not the re-renders) on sh-rendered 512x512 captures made once by the glaze
 // command: three views of the red sphere (homogeneous), four of the textured sphere at

@@ -107,6 +107,12 @@ TEST(Cli, RenderWithTheShIntegrator) {
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --spp 4 --out " + dir.file("x.exr"), dir), "--spp");
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --lmax 4 --out " + dir.file("x.exr"), dir), "--lmax");
   expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator photon --out " + dir.file("x.exr"), dir), "photon");
+  // Refinement: reported, only for sh, and not for capture sets.
+  const CommandResult refined = glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss 1 --ss-refine 4 --res 32x32 --out " + dir.file("refined.exr"), dir);
+  ASSERT_EQ(refined.exit_code, 0) << refined.err;
+  EXPECT_NE(refined.err.find("refined 4"), std::string::npos) << refined.err;
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --ss-refine 4 --out " + dir.file("x.exr"), dir), "--ss-refine");
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss-refine 4 --captures " + dir.file("set"), dir), "--ss-refine");
 }
 
 // The study on a tiny frame: every row and file is there, the path tracer's error falls
@@ -135,15 +141,17 @@ TEST(Cli, ConvergenceWritesTheStudy) {
     EXPECT_GT(std::stod(seconds), 0.0) << line;
     ++rows;
   }
-  EXPECT_EQ(rows, 5 + 15);  // 1..16 spp, 5 lmax x 3 ss
+  EXPECT_EQ(rows, 5 + 25);  // 1..16 spp, 5 lmax x (ss 1, 2, 4, and ss 1 and 2 refined to 8)
   EXPECT_LT(error["16 spp"], 0.5 * error["1 spp"]);  // 1/4 expected
   EXPECT_GT(error["16 spp"], 0.1 * error["1 spp"]);
   EXPECT_LT(error["lmax 12 ss 4"], error["lmax 2 ss 4"]);
+  // Refining the pixels whose 2 x 2 samples show an edge removes most of ss 2's aliasing.
+  EXPECT_LT(error["lmax 12 ss 2 refined 8"], error["lmax 12 ss 2"]);
 
   std::ifstream split(dir.file("study/split.csv"));
   int split_rows = -1;
   while (std::getline(split, line)) ++split_rows;
-  EXPECT_EQ(split_rows, 15);
+  EXPECT_EQ(split_rows, 25);
   const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir.file("study/summary.json")));
   EXPECT_GT(summary["reference"]["relative_noise"].get<double>(), 0.0);
   EXPECT_TRUE(summary["time_to"].contains("0.01"));

@@ -187,5 +187,61 @@ TEST(ShIntegratorStiff, MirrorBlackBaseAndGrazingViewsStayFinite) {
   }
 }
 
+// Refinement re-renders a pixel on a finer grid where its K x K samples show an edge:
+// every pixel of the refined image is the uniform K x K image's or a uniform M x M
+// image's for some K < M <= 8 (the same rays, so to rounding); the silhouette (on a black
+// background) is refined and most pixels are not; and the result is about as close to a
+// uniform 16 x 16 image as the uniform 8 x 8 one is, far closer than the K x K one.
+TEST(ShIntegratorSampling, RefinedPixelsTakeAFinerGridWhereTheCoarseSamplesShowAnEdge) {
+  const Scene scene = load_scene(std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf");
+  const Environment environment = make_environment("procedural:office");
+  const RayTracer tracer(scene);
+  const PinholeCamera camera = scene.make_camera(scene.camera("view_0"), std::pair(128, 128));
+  ShIntegratorOptions options{4, 2, true, 0};
+  std::map<int, Image> uniform;  // by grid size
+  for (int grid : {2, 3, 4, 5, 6, 7, 8, 16}) {
+    options.supersampling = grid;
+    uniform[grid] = render_sh(scene, tracer, environment, camera, options);
+  }
+  options.supersampling = 2;
+  options.refined_supersampling = 8;
+  const Image refined = render_sh(scene, tracer, environment, camera, options);
+  const Image& coarse = uniform[2];
+  const Image& finest = uniform[16];
+  int refined_pixels = 0, silhouette_pixels = 0, silhouette_refined = 0;
+  double refined_error = 0.0, coarse_error = 0.0, eight_error = 0.0;
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const RGB value = refined.at(x, y);
+      auto same = [&](const Image& other) {
+        return ((value - other.at(x, y)).abs() <= RGB::Constant(1e-5f) * (1.0f + other.at(x, y).abs())).all();
+      };
+      int grid = 0;  // the coarsest uniform grid it is
+      for (const auto& [size, image] : uniform)
+        if (grid == 0 && size <= 8 && same(image)) grid = size;
+      ASSERT_GT(grid, 0) << "pixel " << x << ", " << y << " is none of the uniform images";
+      refined_pixels += grid > 2;
+      // On the sphere beside a pixel off it (a black background): the samples step.
+      bool silhouette = false;
+      for (const auto& [dx, dy] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)})
+        silhouette |= x + dx >= 0 && x + dx < camera.width && y + dy >= 0 && y + dy < camera.height &&
+                      coarse.at(x, y).maxCoeff() > 0.0f && coarse.at(x + dx, y + dy).maxCoeff() == 0.0f;
+      silhouette_pixels += silhouette;
+      silhouette_refined += silhouette && grid > 2;
+      refined_error += (value - finest.at(x, y)).square().sum();
+      coarse_error += (coarse.at(x, y) - finest.at(x, y)).square().sum();
+      eight_error += (uniform[8].at(x, y) - finest.at(x, y)).square().sum();
+    }
+  std::printf("refined %d of %d pixels (%d on the silhouette); squared error against 16 x 16: %.3g of 2 x 2's, "
+              "%.3g of 8 x 8's\n", refined_pixels, camera.width * camera.height, silhouette_pixels,
+              refined_error / coarse_error, refined_error / eight_error);
+  EXPECT_GT(silhouette_pixels, 20);
+  EXPECT_EQ(silhouette_refined, silhouette_pixels);
+  EXPECT_GT(refined_pixels, silhouette_pixels);                 // the reflected window's edges too
+  EXPECT_LT(refined_pixels, camera.width * camera.height / 4);  // but not the smooth parts
+  EXPECT_LT(refined_error, 0.02 * coarse_error);
+  EXPECT_LT(refined_error, 2.0 * eight_error);
+}
+
 }  // namespace
 }  // namespace glaze
