@@ -20,7 +20,7 @@ namespace glaze {
 int command_invert_fit(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
                              "env-scale", "env-rotation", "holdout", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
-                             "Rd", "env-res", "ridge", "solve-res", "frames", "screenshot", "exposure", "tone-map"},
+                             "Rd", "env-res", "ridge", "solve-res", "diffuse-lmax", "frames", "screenshot", "exposure", "tone-map"},
                        {"preview"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
     throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");
@@ -31,6 +31,7 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   const bool lighting = mode == "lighting" || mode == "joint";
   if (!lighting && (args.has("env-res") || args.has("ridge") || args.has("solve-res")))
     throw Error("--env-res, --solve-res and --ridge apply to --mode lighting and joint");
+  if (mode != "joint" && args.has("diffuse-lmax")) throw Error("--diffuse-lmax applies to --mode joint");
   if (mode != "lighting" && (args.has("R0") || args.has("Rd"))) throw Error("--R0 and --Rd give the known material of --mode lighting");
   if (lighting && (args.has("loss") || args.has("loss-scale")))
     throw Error("--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least squares)");
@@ -53,6 +54,7 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   args.resolution("env-res", {256, 128});
   args.resolution("solve-res", {64, 32});
   args.real("ridge", 0.0f);
+  args.integer("diffuse-lmax", 16, 0, kShMaxLmax);
   if (args.has("preview")) {
     args.integer("frames", 1, 1, 1 << 20);
     parse_tone_mapping(args.text("tone-map", "filmic"));

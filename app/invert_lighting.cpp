@@ -61,7 +61,10 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", solve_default);
 
   auto stage = Clock::now();
-  const LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
+  // The joint fit on full-band captures models the diffuse term's bands up to this one
+  // (joint_fit.h); 16 keeps all but 0.4% of the kernel's L2 norm, as --mode material's.
+  const int diffuse_lmax = static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax));
+  LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
   stage_seconds["gather"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
   const FinishPreview finish_preview{preview};
@@ -82,7 +85,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     // for the fit's model when that is at most the fit's lmax (see joint_fit.h). Other
     // captures, or sh ones that do not say their lmax, get a band above any fit's.
     joint_options.band_limited_diffuse = capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
-    joint_fit = fit_joint(data, in.samples, options, joint_options, observer);
+    joint_fit = fit_joint_full_band(data, in.samples, in.captures, *in.tracer, footprint, diffuse_lmax, options, joint_options,
+                                    observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
   const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
@@ -111,6 +115,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["iterations"] = joint_fit->iterations;
     result["evaluations"] = joint_fit->evaluations;
     result["band_limited_diffuse"] = joint_options.band_limited_diffuse;
+    result["diffuse_lmax"] = joint_fit->diffuse_lmax;
+    result["passes"] = joint_fit->passes;
     result["converged"] = joint_fit->converged;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
@@ -133,6 +139,14 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     warn("the mirror reflection carries only " + std::to_string(std::lround(100 * fit.mirror_share)) +
          "% of the observed light: the object is matte-like, so only the low frequencies (the SH part) are reliable; "
          "the high-resolution map is noisy");
+  // The joint fit reads R0, and with it the lighting's absolute scale, from that share:
+  // measured on the white sphere in the blue room (9%), capture noise alone moves R0 by
+  // about 0.015 between noise realisations, and Rd and the scale with it.
+  if (joint && fit.mirror_share < 0.1)
+    warn("--mode joint reads R0 and the lighting's absolute scale from the mirror reflection, which here carries only " +
+         std::to_string(std::lround(100 * fit.mirror_share)) +
+         "%: R0, Rd and the scale are weakly determined and capture noise can move them far (check the residual "
+         "images); a known material (--mode lighting) or a glossier object pins them");
 
   // Against the set's own lighting, when it names one: what a known-truth experiment checks.
   if (const std::optional<EnvironmentSpec> truth = capture_environment(in.captures)) {

@@ -121,9 +121,11 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
     }
     return Rd;
   };
-  double R0 = 0.04, last_step = INFINITY;
+  // A start near the answer (the second pass of fit_joint_full_band) skips round 0.
+  const bool warm = joint.start_R0 >= r0_bounds.lower && joint.start_R0 <= r0_bounds.upper;
+  double R0 = warm ? joint.start_R0 : 0.04, last_step = INFINITY;
   Eigen::MatrixXd lighting, d;
-  for (int round = 0; round < joint.max_rounds; ++round) {
+  for (int round = warm ? 1 : 0; round < joint.max_rounds; ++round) {
     // Round 0 is plain least squares over the whole range; each later round sets the
     // robust scale at the last R0 and searches again.
     if (round > 0) cross.calibrate(R0);
@@ -145,7 +147,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       R0 = minimise_on(misfit, {low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high});
       if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid);
     }
-    fit.iterations = round + 1;
+    ++fit.iterations;
     // The search's fit at R0 when it kept it (a tie can leave another point kept), and
     // after round 0, which searched on a quarter of the pairs, the fit on all of them.
     const CrossViewSystem::Fit at = round > 0 && best.R0 == R0 ? best.fit : cross.fit(R0);
@@ -190,6 +192,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 
   const std::string method = joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
                                                         : "the map-consistent lighting solve (full-band diffuse)";
+  fit.diffuse_lmax = data.lmax;
   fit.brief_report = "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) +
                      " evaluations over " + std::to_string(cross.pair_count()) + " view pairs, " +
                      (fit.converged ? "converged" : "NOT converged") + "; Rd from " + method;
@@ -198,6 +201,31 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
                     std::to_string(r0_bounds.lower) + ", " + std::to_string(r0_bounds.upper) + "]:\n" + rounds +
                     "Rd from " + method + "\n" + fit.brief_report + "\n";
   return fit;
+}
+
+JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
+                             const RayTracer& tracer, int footprint, int diffuse_lmax, const LightingFitOptions& options,
+                             JointFitOptions joint, const FitObserver& observer) {
+  const JointFit first = fit_joint(data, samples, options, joint, observer);
+  if (joint.band_limited_diffuse || diffuse_lmax <= data.lmax) return first;
+  // The bands above lmax from the first pass's lighting and material (joint_fit.h).
+  const Environment recovered(first.lighting.map, EnvironmentOptions{}, "the first pass's lighting");
+  DiffuseBandsAbove above{recovered.sh(diffuse_lmax), RGBd::Zero()};
+  above.per_lighting = kDiffuseNormalisation * (1.0 - first.R0) * first.Rd.cast<double>();
+  data = gather_lighting_data(samples, captures, tracer, data.lmax, footprint, &above);
+  joint.start_R0 = first.R0;
+  JointFit second = fit_joint(data, samples, options, joint, observer);
+  second.passes = 2;
+  second.diffuse_lmax = diffuse_lmax;
+  second.iterations += first.iterations, second.evaluations += first.evaluations;
+  char line[200];
+  std::snprintf(line, sizeof line, "first pass (diffuse bands to %d): R0 %.5f, Rd %.4f %.4f %.4f; second pass with bands %d-%d "
+                "predicted from its lighting:\n", data.lmax, first.R0, first.Rd[0], first.Rd[1], first.Rd[2], data.lmax + 1,
+                diffuse_lmax);
+  second.brief_report += "; diffuse bands " + std::to_string(data.lmax + 1) + "-" + std::to_string(diffuse_lmax) +
+                         " from the first pass's lighting (2 passes)";
+  second.full_report = first.full_report + line + second.full_report;
+  return second;
 }
 
 }  // namespace glaze

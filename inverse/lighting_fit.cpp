@@ -33,8 +33,15 @@ struct Moments {
 }  // namespace
 
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint) {
+                                  int footprint, const DiffuseBandsAbove* above) {
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
+  // E(n) of the bands above lmax alone.
+  std::optional<ShDiffuseSum> above_sum;
+  if (above && above->lighting.lmax > lmax) {
+    ShCoefficients bands = above->lighting;
+    std::fill(bands.values.begin(), bands.values.begin() + sh_count(lmax), RGBd::Zero());
+    above_sum.emplace(bands);
+  }
   const int n = sh_count(lmax);
   const size_t count = samples.samples.size();
   std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
@@ -59,10 +66,12 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
     std::vector<float> basis(n);
     for (size_t r = 0; r < rows; ++r) {
       const size_t k = first + r;
+      RGBd high_bands = RGBd::Zero();  // sum of share g E_above(n)
       for_each_model_pixel(samples, k, captures, tracer, footprint,
                            [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
                              sh_eval<float>(lmax, centre_normal, basis);
                              for (int i = 0; i < n; ++i) y[i] = basis[i] * kernel[i];  // Lambda h Y(n)
+                             const RGBd E_above = above_sum ? RGBd((*above_sum)(centre_normal).cast<double>()) : RGBd::Zero();
                              const double share = weight / rays.size();
                              for (const FootprintRay& ray : rays) {
                                const double g = coat_transmittance_g(ray.hit.normal.dot(ray.view));
@@ -72,14 +81,17 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
                                  B(i, r) += share * g * basis[i];
                                  C(i, r) += share * g * y[i];
                                }
+                               high_bands += share * g * E_above;
                              }
                            });
       const Sample& s = samples.samples[k];
-      O.row(r) = s.observed.cast<double>().matrix().transpose();
+      const RGBd removed = above_sum ? RGBd(above->per_lighting * high_bands) : RGBd::Zero();
+      const RGB observed = (s.observed.cast<double>() - removed).cast<float>();
+      O.row(r) = Eigen::RowVector3d(observed[0], observed[1], observed[2]);
       for (int i = 0; i < n; ++i) data.c[k * n + i] = float(C(i, r));
       data.reflected[k] = reflect(s.view, s.normal);
       data.mu[k] = s.mu;
-      data.observed[k] = s.observed;
+      data.observed[k] = observed;
       data.frame[k] = s.frame;
     }
     Moments& m = partial[chunk];

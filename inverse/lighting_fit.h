@@ -50,8 +50,21 @@ struct LightingData {
   }
 };
 
+// The diffuse term's bands above a fit's lmax, predicted from a lighting estimate. A fit
+// at lmax models the diffuse sum up to lmax only, which is exact for glaze's `sh`
+// captures but not for photographs or the path tracer, whose diffuse term has every
+// band: under small bright sources the bands above 4 carry about 5% of it (the kernel's
+// h_l decay slowly, sh.h), as much as a diffuse object's whole mirror reflection.
+struct DiffuseBandsAbove {
+  ShCoefficients lighting;  // its bands lmax+1 .. lighting.lmax are used
+  RGBd per_lighting = RGBd::Zero();  // 21/(20 pi) (1 - R0) Rd: radiance per unit of g E(n)
+};
+
+// With `above`, each observation is taken less the diffuse radiance of those bands
+// (through the same pixel footprint as the model rows), so that what remains is what the
+// fit's lmax models.
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint);
+                                  int footprint, const DiffuseBandsAbove* above = nullptr);
 
 struct LightingFitOptions {
   // Ridge (Tikhonov) weight, relative to the mean diagonal of the normal equations. Tiny:
