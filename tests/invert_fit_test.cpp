@@ -275,14 +275,14 @@ TEST(InvertFitJoint, NoiseFreeRealMapsMeetTheBounds) {
 
 // Full-band diffuse term (what photographs and the path tracer have): noise-free captures
 // of the sh integrator at lmax 16, fitted at lmax 4, where the bands 5-16 are not in the
-// model. The second pass predicts them from the first pass's lighting (joint_fit.h); one
-// pass is held to its own measured error, several times larger, so that a second pass
-// that does nothing fails here. Measured (R0; Rd; scale): white sphere in the blue room,
-// one pass +0.0000; -0.021 -0.011 -0.003; 1.030, two passes +0.0000; +0.0007 +0.0006
-// +0.0003; 0.999; red sphere in the office, two passes +0.0000; -0.0035 (red) -0.0000
-// +0.0000. R0 and the scale meet the noise-free bounds (0.001, 3%); Rd is asserted within
-// 0.005, short of the noise-free 0.003 (the predicted bands come from a recovered map,
-// not the true one) and within the path-traced 0.01.
+// model. The second pass predicts them from the first pass's lighting (joint_fit.h).
+// Measured (R0; Rd; scale): white sphere in the blue room, one pass (--diffuse-lmax 0)
+// +0.0000; -0.021 -0.011 -0.003; 1.030, two passes +0.0000; +0.0007 +0.0006 +0.0003;
+// 0.999; red sphere in the office, two passes +0.0000; -0.0035 (red) -0.0000 +0.0000.
+// R0 and the scale meet the noise-free bounds (0.001, 3%); Rd is asserted within 0.005,
+// short of the noise-free 0.003 (the predicted bands come from a recovered map, not the
+// true one) and within the path-traced 0.01; a second pass that did nothing would fail
+// it (one pass: 0.021).
 TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
   TemporaryDirectory dir;
   for (const char* scene : {"white_sphere_blue_room.gltf", "red_sphere_office.gltf"}) {
@@ -295,22 +295,9 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
     EXPECT_EQ(result["diffuse_lmax"].get<int>(), 16);
     EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
     EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-    double worst_Rd = 0.0;
     for (int c = 0; c < 3; ++c) {
-      worst_Rd = std::max(worst_Rd, std::abs(result["Rd"][c].get<double>() - truth["Rd"][c].get<double>()));
+      EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.005) << "channel " << c;
       EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-    }
-    EXPECT_LT(worst_Rd, 0.005);
-    if (std::string(scene) == "white_sphere_blue_room.gltf") {
-      // One pass on the same captures: the bands above 4 left in the observations.
-      const CommandResult one = glaze("invert-fit " + folder + "/transforms.json --mode joint --pixel-footprint 1 --diffuse-lmax 0 --out " + folder + "/one", dir);
-      ASSERT_EQ(one.exit_code, 0) << one.err;
-      const nlohmann::json single = read_json(folder + "/one/fit.json");
-      EXPECT_EQ(single["passes"].get<int>(), 1);
-      double worst_single = 0.0;
-      for (int c = 0; c < 3; ++c)
-        worst_single = std::max(worst_single, std::abs(single["Rd"][c].get<double>() - truth["Rd"][c].get<double>()));
-      EXPECT_GT(worst_single, 3.0 * worst_Rd);
     }
     std::filesystem::remove_all(folder);
   }
