@@ -31,8 +31,9 @@
 // detail, not its absolute level: a lighting too bright by s comes with an Rd too dark
 // by about 1/s, and the bands' diffuse radiance, their product, is nearly right even
 // when the first fit is not. (Measured on noise-free captures whose diffuse term has
-// the bands up to 16, white sphere in the blue room, fitted at lmax 4: R0 +0.0066 and Rd
-// +0.043 in one pass, +0.0004 and +0.006 after the second; a third changes nothing.)
+// the bands up to 16 (ss 4), white sphere in the blue room, fitted at lmax 4: R0 +0.0066
+// and Rd +0.043 in one pass, +0.0005 and +0.003 after the second; a third changes
+// nothing measurable.)
 #pragma once
 
 #include "inverse/fit_progress.h"
