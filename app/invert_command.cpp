@@ -31,7 +31,7 @@ int command_invert_fit(const std::vector<std::string>& raw) {
   const bool lighting = mode == "lighting" || mode == "joint";
   if (!lighting && (args.has("env-res") || args.has("ridge") || args.has("solve-res")))
     throw Error("--env-res, --solve-res and --ridge apply to --mode lighting and joint");
-  if (mode != "joint" && args.has("diffuse-lmax")) throw Error("--diffuse-lmax applies to --mode joint");
+  if (!lighting && args.has("diffuse-lmax")) throw Error("--diffuse-lmax applies to --mode lighting and joint");
   if (mode != "lighting" && (args.has("R0") || args.has("Rd"))) throw Error("--R0 and --Rd give the known material of --mode lighting");
   if (lighting && (args.has("loss") || args.has("loss-scale")))
     throw Error("--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least squares)");

@@ -61,9 +61,13 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", solve_default);
 
   auto stage = Clock::now();
-  // The joint fit on full-band captures models the diffuse term's bands up to this one
-  // (joint_fit.h); 16 keeps all but 0.4% of the kernel's L2 norm, as --mode material's.
-  const int diffuse_lmax = static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax));
+  // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact for
+  // the fit's model when that is at most the fit's lmax. Other captures, or sh ones that
+  // do not say their lmax, get a band above any fit's: on them a second pass models the
+  // diffuse term's bands up to diffuse_lmax (lighting_fit.h, joint_fit.h); 16 keeps all
+  // but 0.4% of the kernel's L2 norm, as --mode material's.
+  const bool band_limited = capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
+  const int diffuse_lmax = band_limited ? lmax : static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax));
   LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
   stage_seconds["gather"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
@@ -81,15 +85,14 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     };
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
-    // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact
-    // for the fit's model when that is at most the fit's lmax (see joint_fit.h). Other
-    // captures, or sh ones that do not say their lmax, get a band above any fit's.
-    joint_options.band_limited_diffuse = capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
+    joint_options.band_limited_diffuse = band_limited;
     joint_fit = fit_joint_full_band(data, in.samples, in.captures, *in.tracer, footprint, diffuse_lmax, options, joint_options,
                                     observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
-  const LightingFit fit = joint ? joint_fit->lighting : fit_lighting(data, material.R0(), material.Rd(), options);
+  const LightingFit fit = joint ? joint_fit->lighting
+                                : fit_lighting_full_band(data, in.samples, in.captures, *in.tracer, footprint, diffuse_lmax,
+                                                         material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
 
   std::filesystem::create_directories(out);
@@ -107,16 +110,15 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
                            {"map_resolution", {options.width, options.height}}, {"solve_resolution", {options.solve_width, options.solve_height}}, {"covered_fraction", fit.covered_fraction},
                            {"mirror_share", fit.mirror_share}, {"channel_mirror_share", rgb_json(fit.channel_mirror_share.cast<float>())}, {"multi_view_fraction", fit.multi_view_fraction},
                            {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"}, {"samples", in.samples.samples.size()},
-                           {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint}};
+                           {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint},
+                           {"band_limited_diffuse", band_limited}, {"diffuse_lmax", data.diffuse_lmax},
+                           {"passes", data.diffuse_lmax > lmax ? 2 : 1}};
   if (fit.condition > 1e6)
     warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
          std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
   if (joint) {
     result["iterations"] = joint_fit->iterations;
     result["evaluations"] = joint_fit->evaluations;
-    result["band_limited_diffuse"] = joint_options.band_limited_diffuse;
-    result["diffuse_lmax"] = joint_fit->diffuse_lmax;
-    result["passes"] = joint_fit->passes;
     result["converged"] = joint_fit->converged;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
@@ -195,16 +197,18 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   result["stage_seconds"] = stage_seconds;
   result["seconds"] = seconds_since(start);
   // Lighting alone is linear least squares: its report says what was solved, and how well posed.
-  char linear_report[512];
+  char linear_report[640];
   std::snprintf(linear_report, sizeof linear_report,
                 "glaze lighting recovery: linear least squares (no iterations)\n"
                 "  L_lm, lmax %d: %d unknowns per channel; condition number %.4g (before the ridge %.3g)\n"
                 "  solve: %s at %dx%d (%.1f%% of its covered texels seen from two or more views)\n"
-                "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n",
+                "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n"
+                "  diffuse term modelled to l = %d%s\n",
                 lmax, sh_count(lmax), fit.condition, options.ridge,
                 fit.map_consistent ? "map-consistent (value and gradient per texel, with L_lm)" : "SH-only least squares",
                 options.solve_width, options.solve_height, 100 * fit.multi_view_fraction, in.samples.samples.size(),
-                fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2]);
+                fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2],
+                data.diffuse_lmax, data.diffuse_lmax > lmax ? " (bands above lmax predicted by a first fit's map: 2 passes)" : "");
   write_fit(out, result, joint ? joint_fit->full_report : std::string(linear_report));
   if (joint)
     std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d rounds, %s)\n", material.R0(), material.Rd()[0],

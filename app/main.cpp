@@ -103,11 +103,11 @@ options of `invert-fit`:
   --mode lighting:    --R0 x --Rd r,g,b (default: the set's material), --lmax N
                       (default 4), --env-res WxH (recovered map, default 256x128),
                       --solve-res WxH (map solved with L_lm, default 64x32),
-                      --ridge R (relative Tikhonov weight, default 1e-6)
-  --mode joint:       as lighting, without the material; --solve-res default 128x64;
+                      --ridge R (relative Tikhonov weight, default 1e-6),
                       --diffuse-lmax N (default 16; 0: off): for captures whose diffuse
                       term has every band (photographs, the path tracer), a second pass
                       with the bands lmax+1..N predicted from the first pass's lighting
+  --mode joint:       as lighting, without the material; --solve-res default 128x64
   --preview           a window: each view observed, predicted and |residual| x8,
                       updated as the solver iterates (--frames N --screenshot F.png,
                       --exposure, --tone-map as for preview)

@@ -14,16 +14,19 @@ namespace glaze {
 namespace {
 
 // Brent's minimisation (golden sections with parabolic steps) of f on [a, b], from x
-// inside it with f(x) = fx, to 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
+// inside it with f(x) = fx and the two points w, v nearest it (fw, fv: the grid's
+// neighbours of its best point), to `tolerance` relative plus a tenth of it absolute. With
+// three points known the first step is already the parabola's.
 template <typename Function>
-double minimise_bracketed(Function&& f, double a, double b, double x, double fx) {
+double minimise_bracketed(Function&& f, double a, double b, double x, double fx, double w, double fw, double v, double fv,
+                          double tolerance) {
   constexpr double kGolden = 0.3819660112501051;
-  double w = x, v = x, fw = fx, fv = fx, step = 0.0, previous_step = 0.0;
+  double step = 0.0, previous_step = b - a;
   for (int iteration = 0; iteration < 100; ++iteration) {
-    const double middle = 0.5 * (a + b), tolerance = 1e-4 * std::abs(x) + 1e-5;
-    if (std::abs(x - middle) <= 2.0 * tolerance - 0.5 * (b - a)) break;
+    const double middle = 0.5 * (a + b), reach = tolerance * (std::abs(x) + 0.1);
+    if (std::abs(x - middle) <= 2.0 * reach - 0.5 * (b - a)) break;
     bool parabolic = false;
-    if (std::abs(previous_step) > tolerance) {
+    if (std::abs(previous_step) > reach && w != x && v != x && v != w) {
       // The parabola through (x, w, v); its step is taken when it falls inside the
       // bracket and is under half the step before last.
       const double r = (x - w) * (fx - fv);
@@ -33,11 +36,11 @@ double minimise_bracketed(Function&& f, double a, double b, double x, double fx)
       q = std::abs(q);
       if (std::abs(p) < std::abs(0.5 * q * previous_step) && p > q * (a - x) && p < q * (b - x)) {
         previous_step = step, step = p / q, parabolic = true;
-        if (x + step - a < 2.0 * tolerance || b - (x + step) < 2.0 * tolerance) step = x < middle ? tolerance : -tolerance;
+        if (x + step - a < 2.0 * reach || b - (x + step) < 2.0 * reach) step = x < middle ? reach : -reach;
       }
     }
     if (!parabolic) previous_step = (x < middle ? b : a) - x, step = kGolden * previous_step;
-    const double u = std::abs(step) >= tolerance ? x + step : x + (step > 0.0 ? tolerance : -tolerance);
+    const double u = std::abs(step) >= reach ? x + step : x + (step > 0.0 ? reach : -reach);
     const double fu = f(u);
     if (fu <= fx) {
       (u < x ? b : a) = x;
@@ -53,20 +56,25 @@ double minimise_bracketed(Function&& f, double a, double b, double x, double fx)
 
 // The grid's best point and its neighbours as a bracket, then Brent's method in it.
 template <typename Function>
-double minimise_on(Function&& f, const std::vector<double>& grid) {
+double minimise_on(Function&& f, const std::vector<double>& grid, double tolerance) {
+  std::vector<double> values(grid.size());
   size_t best = 0;
-  double best_value = INFINITY;
   for (size_t i = 0; i < grid.size(); ++i) {
-    const double value = f(grid[i]);
-    if (value < best_value) best_value = value, best = i;
+    values[i] = f(grid[i]);
+    if (values[i] < values[best]) best = i;
   }
-  return minimise_bracketed(f, grid[best > 0 ? best - 1 : 0], grid[std::min(best + 1, grid.size() - 1)], grid[best], best_value);
+  const size_t low = best > 0 ? best - 1 : 0, high = std::min(best + 1, grid.size() - 1);
+  // w: the better neighbour, v: the other (at an end of the grid both are the one there).
+  const bool low_better = low != best && (high == best || values[low] <= values[high]);
+  const size_t w = low_better ? low : high, v = low_better ? high : low;
+  return minimise_bracketed(f, grid[low], grid[high], grid[best], values[best], grid[w], values[w], grid[v], values[v], tolerance);
 }
 
-}  // namespace
+// The searches for R0 stop at 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
+constexpr double kR0Tolerance = 1e-4;
 
-JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
-                   const JointFitOptions& joint, const FitObserver& observer) {
+// The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
+CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options) {
   const size_t count = data.observed.size();
   if (count < size_t(sh_count(data.lmax)) + 4)
     throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
@@ -77,7 +85,14 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
     throw Error("only " + std::to_string(int(100 * probe.multi_view_fraction)) +
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
-  CrossViewSystem cross(data, samples);
+  return CrossViewSystem(data, samples);
+}
+
+// One joint fit of `data` on `cross` (built on the same data object); the robust rounds
+// searches for R0 stop at `tolerance` relative (minimise_bracketed).
+JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const LightingFitOptions& options,
+                    const JointFitOptions& joint, double tolerance, const FitObserver& observer) {
+  const size_t count = data.observed.size();
   const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
   const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
   std::vector<double> grid;  // R0 from 0 to 1, finest where coats are (0.02-0.06)
@@ -116,7 +131,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
       for (int i = 0; i <= 20; ++i) levels.push_back(rd_bounds.lower + (rd_bounds.upper - rd_bounds.lower) * i / 20.0);
       for (int c = 0; c < 3; ++c) {
         auto channel = [&](double value) { return profile.squared_error(value, c); };
-        Rd[c] = float(minimise_on(channel, levels));
+        Rd[c] = float(minimise_on(channel, levels, 1e-4));
       }
     }
     return Rd;
@@ -134,18 +149,20 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
     if (round == 0) {
       // A start: every fourth pair is plenty for plain least squares.
       cross.use_every(4);
-      R0 = minimise_on(misfit, grid);
+      R0 = minimise_on(misfit, grid, tolerance);
       cross.use_every(1);
     } else {
       // Near the last R0 (the scale changes the misfit, rarely its minimum by much): after
       // round 0's least squares within 25%, later within four times the last round's
-      // step (at least 2%), five points and Brent's method between the best one's
-      // neighbours; the whole grid again when the minimum is at the bracket's edge.
+      // step (at least 2%), five points (later three: the ends and the last R0) and
+      // Brent's method between the best one's neighbours; the whole grid again when the
+      // minimum is at the bracket's edge.
       const double reach = round == 1 ? 0.25 * R0 + 0.002 : std::max(4.0 * last_step, 0.02 * R0 + 0.0005);
       const double low = std::max(double(r0_bounds.lower), R0 - reach);
       const double high = std::min(double(r0_bounds.upper), R0 + reach);
-      R0 = minimise_on(misfit, {low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high});
-      if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid);
+      R0 = minimise_on(misfit, round == 1 ? std::vector{low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high}
+                                          : std::vector{low, R0, high}, tolerance);
+      if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid, tolerance);
     }
     ++fit.iterations;
     // The search's fit at R0 when it kept it (a tie can leave another point kept), and
@@ -192,7 +209,6 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 
   const std::string method = joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
                                                         : "the map-consistent lighting solve (full-band diffuse)";
-  fit.diffuse_lmax = data.lmax;
   fit.brief_report = "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) +
                      " evaluations over " + std::to_string(cross.pair_count()) + " view pairs, " +
                      (fit.converged ? "converged" : "NOT converged") + "; Rd from " + method;
@@ -203,6 +219,14 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
   return fit;
 }
 
+}  // namespace
+
+JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
+                   const JointFitOptions& joint, const FitObserver& observer) {
+  CrossViewSystem cross = pair_views(data, samples, options);
+  return joint_pass(data, cross, options, joint, kR0Tolerance, observer);
+}
+
 JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
                              const RayTracer& tracer, int footprint, int diffuse_lmax, const LightingFitOptions& options,
                              JointFitOptions joint, const FitObserver& observer) {
@@ -210,19 +234,20 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const
   // The first pass only predicts the bands, for which round 1's R0 is close enough (a
   // round 2 typically moves it by under 1e-4; round 0 alone, plain least squares on a
   // quarter of the pairs, is not: measured Rd +0.012 instead of +0.002 on the noise-free
-  // full-band test); the second pass is the one that converges.
+  // full-band test), and searched to a tenth of the usual precision (1e-3 relative);
+  // the second pass is the one that converges.
   JointFitOptions first_options = joint;
   first_options.max_rounds = std::min(joint.max_rounds, 2);
-  const JointFit first = fit_joint(data, samples, options, first_options, observer);
-  // The bands above lmax from the first pass's lighting and material (joint_fit.h).
-  const Environment recovered(first.lighting.map, EnvironmentOptions{}, "the first pass's lighting");
-  DiffuseBandsAbove above{recovered.sh(diffuse_lmax), RGBd::Zero()};
-  above.per_lighting = kDiffuseNormalisation * (1.0 - first.R0) * first.Rd.cast<double>();
+  // The views' pairing depends on the samples' geometry only, and its noise model on the
+  // captured observations (not on what the second pass takes off them): both passes share
+  // it. It reads `data`, whose observations the second pass replaces in place.
+  CrossViewSystem cross = pair_views(data, samples, options);
+  const JointFit first = joint_pass(data, cross, options, first_options, 10 * kR0Tolerance, observer);
+  // The bands above lmax from the first pass's lighting and material.
+  const DiffuseBandsAbove above = predict_diffuse_bands(first.lighting.map, diffuse_lmax, first.R0, first.Rd);
   data = gather_lighting_data(samples, captures, tracer, data.lmax, footprint, &above);
   joint.start_R0 = first.R0;
-  JointFit second = fit_joint(data, samples, options, joint, observer);
-  second.passes = 2;
-  second.diffuse_lmax = diffuse_lmax;
+  JointFit second = joint_pass(data, cross, options, joint, kR0Tolerance, observer);
   second.iterations += first.iterations, second.evaluations += first.evaluations;
   char line[200];
   std::snprintf(line, sizeof line, "first pass (diffuse bands to %d): R0 %.5f, Rd %.4f %.4f %.4f; second pass with bands %d-%d "

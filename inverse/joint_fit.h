@@ -26,11 +26,9 @@
 // fit's lmax, and under small bright sources the bands above it (about 5% of the diffuse
 // term at lmax 4) are as large as a diffuse object's whole mirror reflection, which is
 // what R0 is read from. fit_joint_full_band predicts those bands (up to diffuse_lmax)
-// from the lighting the first fit recovers at its material, takes them off the
-// observations and fits again from the first R0. The prediction needs the lighting's
-// detail, not its absolute level: a lighting too bright by s comes with an Rd too dark
-// by about 1/s, and the bands' diffuse radiance, their product, is nearly right even
-// when the first fit is not. (Measured on noise-free captures whose diffuse term has
+// from the lighting the first fit recovers at its material (predict_diffuse_bands in
+// lighting_fit.h says why that lighting is good enough), takes them off the
+// observations and fits again from the first R0. (Measured on noise-free captures whose diffuse term has
 // the bands up to 16 (ss 4), white sphere in the blue room, fitted at lmax 4: R0 +0.0066
 // and Rd +0.043 in one pass, +0.0005 and +0.003 after the second; a third changes
 // nothing measurable.)
@@ -49,8 +47,6 @@ struct JointFit {
   RGB Rd = RGB::Zero();
   LightingFit lighting;  // at the recovered material
   int iterations = 0;    // rounds of step 1 (robust scale, then the search for R0)
-  int passes = 1;        // 2 when the diffuse bands above lmax were modelled (fit_joint_full_band)
-  int diffuse_lmax = 0;  // the diffuse term's bands modelled: lmax, or diffuse_lmax after two passes
   int evaluations = 0;   // of the robust misfit
   bool converged = false;
   double rms = 0.0;  // of the map-consistent model over samples and channels

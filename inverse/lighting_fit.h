@@ -29,6 +29,9 @@ namespace glaze {
 // (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
 struct LightingData {
   int lmax = 0;
+  // The observations' diffuse bands lmax+1 .. diffuse_lmax were taken off them
+  // (DiffuseBandsAbove below); lmax when none were.
+  int diffuse_lmax = 0;
   // Moments over samples of the row parts a, b, c (shared by the channels) ...
   Eigen::MatrixXd aa, ab, ac, bb, bc, cc;
   // ... and their products with the observations, one column per channel.
@@ -65,6 +68,12 @@ struct DiffuseBandsAbove {
 // fit's lmax models.
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
                                   int footprint, const DiffuseBandsAbove* above = nullptr);
+
+// The bands up to diffuse_lmax of a recovered lighting map (SH-projected), under the
+// material (R0, Rd). The prediction needs the map's detail more than its level: a joint
+// fit's lighting too bright by s comes with an Rd too dark by about 1/s, and the bands'
+// diffuse radiance is their product.
+DiffuseBandsAbove predict_diffuse_bands(const Image& map, int diffuse_lmax, float R0, const RGB& Rd);
 
 struct LightingFitOptions {
   // Ridge (Tikhonov) weight, relative to the mean diagonal of the normal equations. Tiny:
@@ -158,6 +167,16 @@ class MapConsistentSystem {
 
 // Throws glaze::Error with fewer samples than unknowns.
 LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options);
+
+// For captures whose diffuse term has every band (photographs, the path tracer): a first
+// fit, then a second on the observations less the bands lmax+1 .. diffuse_lmax that the
+// first one's map predicts (above); `data`, gathered at (captures, tracer, footprint),
+// receives the second's observations. One correction, not an iteration: measured on
+// noise-free full-band captures, a third fit changes nothing that matters. diffuse_lmax
+// <= data.lmax: fit_lighting alone.
+LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
+                                   const RayTracer& tracer, int footprint, int diffuse_lmax, float R0, const RGB& Rd,
+                                   const LightingFitOptions& options);
 
 // Relative RMSE of the recovered map against a known environment, both box-filtered to
 // width x height cells (solid-angle weighted), over the cells whose every map texel

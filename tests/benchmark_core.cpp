@@ -179,6 +179,29 @@ void BM_TextureFit4x512(benchmark::State& state) {
 }
 BENCHMARK(BM_TextureFit4x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The issue-6 figure for lighting recovery: samples, shading rows and the lighting (L_lm
+// and the 256x128 map) of the white sphere at its known material, on three sh-rendered
+// 512x512 views: one fit for these band-limited captures; two (diffuse bands to 16
+// predicted from the first, lighting_fit.h) as for photographs and path-traced captures.
+void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
+  const CaptureSet captures = read_transforms(benchmark_captures("white_sphere_office", "novel_0,novel_1"));
+  const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  const RayTracer tracer(scene);
+  const PolishedMaterial material(captures.material["R0"].get<float>(), RGB(captures.material["Rd"][0].get<float>(),
+                                  captures.material["Rd"][1].get<float>(), captures.material["Rd"][2].get<float>()));
+  const int footprint = captures.renderer.value("ss", 1);
+  for (auto _ : state) {
+    const SampleSet set = collect_samples(captures, tracer, scene, {});
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
+    benchmark::DoNotOptimize(
+        fit_lighting_full_band(data, set, captures, tracer, footprint, diffuse_lmax, material.R0(), material.Rd(), {}));
+  }
+}
+void BM_LightingFit3x512(benchmark::State& state) { lighting_fit_benchmark(state, 4); }
+BENCHMARK(BM_LightingFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+void BM_LightingFitTwoPasses3x512(benchmark::State& state) { lighting_fit_benchmark(state, 16); }
+BENCHMARK(BM_LightingFitTwoPasses3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // The issue-6 figure: the joint fit (samples, shading rows, the views' pairing, R0, Rd and
 // the lighting at them; not the re-renders) on three sh-rendered 512x512 views of the
 // white sphere, as `invert-fit --mode joint` runs it on them: one pass for these
