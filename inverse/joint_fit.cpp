@@ -137,8 +137,9 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
     return Rd;
   };
   // A start near the answer (the second pass of fit_joint_full_band) skips round 0.
-  const bool warm = joint.start_R0 >= r0_bounds.lower && joint.start_R0 <= r0_bounds.upper;
-  double R0 = warm ? joint.start_R0 : 0.04, last_step = INFINITY;
+  const bool warm = joint.start_R0.has_value();
+  double R0 = warm ? std::clamp(*joint.start_R0, double(r0_bounds.lower), double(r0_bounds.upper)) : 0.04;
+  double last_step = INFINITY;
   Eigen::MatrixXd lighting, d;
   for (int round = warm ? 1 : 0; round < joint.max_rounds; ++round) {
     // Round 0 is plain least squares over the whole range; each later round sets the

@@ -38,6 +38,7 @@
 #include "inverse/lighting_fit.h"
 #include "inverse/samples.h"
 
+#include <optional>
 #include <string>
 
 namespace glaze {
@@ -57,8 +58,9 @@ struct JointFitOptions {
   int max_rounds = 20;
   // The captures' diffuse term is band-limited at the fit's lmax (see above).
   bool band_limited_diffuse = false;
-  // When in [0, 1]: the search for R0 starts there, near enough to skip the coarse grid.
-  double start_R0 = -1.0;
+  // The search for R0 starts there, near enough to skip the coarse grid (clamped to R0's
+  // bounds).
+  std::optional<double> start_R0;
 };
 
 // Throws glaze::Error when the views leave the problem unconstrained (too few samples,
