@@ -108,13 +108,21 @@ TEST(ShIntegratorAcceptance, BlueRoomWithinOnePercentAtLmax8) {
   EXPECT_NEAR(e.by_lmax.at(8), e.truncation8, 0.003);
 }
 
+// Every real map: lmax 8 within 1%. lmax 4 is within 1% under the three maps whose
+// light comes from large areas (St Fagans, Lebombo, Potsdamer Platz; measured 0.45%,
+// 0.29%, 0.41%), not under the two with small bright sources (Grace's windows
+// 1.44%, studio_small_03's 3e5:1 lamps 1.68%; their truncation alone, noise-free
+// against lmax 32, is the same 1.46% and 1.69%): the paper's model, not the renderer.
 TEST(ShIntegratorAcceptance, RealMapsAgreeUpToTruncation) {
-  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr", "grace_latlong.exr", "studio_small_03_1k.hdr"}) {
+  for (const auto& [name, spread] : {std::pair("st_fagans_interior_1k.hdr", true), std::pair("lebombo_1k.hdr", true),
+                                     std::pair("potsdamer_platz_1k.hdr", true), std::pair("grace_latlong.exr", false),
+                                     std::pair("studio_small_03_1k.hdr", false)}) {
     GLAZE_REQUIRE_ENVMAP(path, name);
     SCOPED_TRACE(name);
     const ModelErrors e = measure(path.string());
     expect_model_agrees_up_to_truncation(e);
     EXPECT_LT(e.by_lmax.at(8), 0.01);
+    if (spread) EXPECT_LT(e.by_lmax.at(4), 0.01);
   }
 }
 
