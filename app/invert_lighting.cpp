@@ -66,8 +66,11 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   // do not say their lmax, get a band above any fit's: on them a second pass models the
   // diffuse term's bands up to diffuse_lmax (lighting_fit.h, joint_fit.h); 16 keeps all
   // but 0.4% of the kernel's L2 norm, as --mode material's.
-  const bool band_limited = capture_defaults(in.captures, kShMaxLmax + 1).second <= lmax;
-  const int diffuse_lmax = band_limited ? lmax : static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax));
+  // (sh captures above the fit's lmax have their bands up to their own lmax only.)
+  const int capture_lmax = capture_defaults(in.captures, kShMaxLmax + 1).second;
+  const bool band_limited = capture_lmax <= lmax;
+  const int diffuse_lmax =
+      band_limited ? lmax : std::min(capture_lmax, static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax)));
   LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint);
   stage_seconds["gather"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
@@ -76,12 +79,14 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   std::optional<JointFit> joint_fit;
   JointFitOptions joint_options;
   FitObserver observer;
-  // The lighting at each iterate is solved on the preview's thread, for the newest only.
+  // The lighting at each iterate (one per round of the joint fit) is solved here, on the
+  // fit's thread: the second pass of a full-band fit replaces `data`, which the preview's
+  // thread must then not be reading.
   if (preview)
     observer = [&](const FitIterate& it) {
-      show_in_preview(preview, in.scene, it.R0, it.Rd, [&data, &options, it] {
-        return std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map, EnvironmentOptions{}, "lighting at the iterate");
-      }, iterate_label(it));
+      const auto lighting = std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map,
+                                                                EnvironmentOptions{}, "lighting at the iterate");
+      show_in_preview(preview, in.scene, it.R0, it.Rd, [lighting] { return lighting; }, iterate_label(it));
     };
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));

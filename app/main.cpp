@@ -107,6 +107,7 @@ options of `invert-fit`:
                       --diffuse-lmax N (default 16; 0: off): for captures whose diffuse
                       term has every band (photographs, the path tracer), a second pass
                       with the bands lmax+1..N predicted from the first pass's lighting
+                      (N <= lmax: off; sh captures: at most their own lmax)
   --mode joint:       as lighting, without the material; --solve-res default 128x64
   --preview           a window: each view observed, predicted and |residual| x8,
                       updated as the solver iterates (--frames N --screenshot F.png,

@@ -21,7 +21,9 @@ template <typename Function>
 double minimise_bracketed(Function&& f, double a, double b, double x, double fx, double w, double fw, double v, double fv,
                           double tolerance) {
   constexpr double kGolden = 0.3819660112501051;
-  double step = 0.0, previous_step = b - a;
+  // A parabolic step is taken only when under half the step before last: both start at
+  // the bracket's width, so that the first two steps may be parabolic.
+  double step = b - a, previous_step = b - a;
   for (int iteration = 0; iteration < 100; ++iteration) {
     const double middle = 0.5 * (a + b), reach = tolerance * (std::abs(x) + 0.1);
     if (std::abs(x - middle) <= 2.0 * reach - 0.5 * (b - a)) break;
@@ -61,10 +63,12 @@ double minimise_on(Function&& f, const std::vector<double>& grid, double toleran
   size_t best = 0;
   for (size_t i = 0; i < grid.size(); ++i) {
     values[i] = f(grid[i]);
+    if (!std::isfinite(values[i])) values[i] = INFINITY;  // never kept, never a start
     if (values[i] < values[best]) best = i;
   }
   const size_t low = best > 0 ? best - 1 : 0, high = std::min(best + 1, grid.size() - 1);
-  // w: the better neighbour, v: the other (at an end of the grid both are the one there).
+  // w: the better neighbour, v: the other (at an end of the grid, v is the best point
+  // itself, and the first step is a golden section).
   const bool low_better = low != best && (high == best || values[low] <= values[high]);
   const size_t w = low_better ? low : high, v = low_better ? high : low;
   return minimise_bracketed(f, grid[low], grid[high], grid[best], values[best], grid[w], values[w], grid[v], values[v], tolerance);
@@ -88,8 +92,8 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
   return CrossViewSystem(data, samples);
 }
 
-// One joint fit of `data` on `cross` (built on the same data object); the robust rounds
-// searches for R0 stop at `tolerance` relative (minimise_bracketed).
+// One joint fit of `data` on `cross` (built on the same data object); the searches for R0
+// stop at `tolerance` relative (minimise_bracketed).
 JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const LightingFitOptions& options,
                     const JointFitOptions& joint, double tolerance, const FitObserver& observer) {
   const size_t count = data.observed.size();

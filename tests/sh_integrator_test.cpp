@@ -115,8 +115,8 @@ TEST(ShIntegratorAcceptance, BlueRoomWithinOnePercentAtLmax8) {
 // against lmax 32, is the same 1.46% and 1.69%): the paper's model, not the renderer.
 TEST(ShIntegratorAcceptance, RealMapsAgreeUpToTruncation) {
   for (const auto& [name, spread] : {std::pair("st_fagans_interior_1k.hdr", true), std::pair("lebombo_1k.hdr", true),
-                                     std::pair("potsdamer_platz_1k.hdr", true), std::pair("grace_latlong.exr", false),
-                                     std::pair("studio_small_03_1k.hdr", false)}) {
+                                     std::pair("grace_latlong.exr", false), std::pair("studio_small_03_1k.hdr", false),
+                                     std::pair("potsdamer_platz_1k.hdr", true)}) {
     GLAZE_REQUIRE_ENVMAP(path, name);
     SCOPED_TRACE(name);
     const ModelErrors e = measure(path.string());
