@@ -83,10 +83,11 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
   if (count < size_t(sh_count(data.lmax)) + 4)
     throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
                 std::to_string(count));
-  // Probe the views: the lighting fit reports how many directions several views see.
-  const LightingFit probe = fit_lighting(data, 0.04f, RGB::Constant(0.5f), options);
-  if (!probe.map_consistent)
-    throw Error("only " + std::to_string(int(100 * probe.multi_view_fraction)) +
+  // The views must see directions in common, as the map-consistent solve needs them.
+  check_lighting_options(options);
+  const double several_views = multi_view_fraction(data, options.solve_width, options.solve_height);
+  if (several_views < kMapConsistentFraction)
+    throw Error("only " + std::to_string(int(100 * several_views)) +
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
   return CrossViewSystem(data, samples);

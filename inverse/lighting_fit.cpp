@@ -297,33 +297,40 @@ MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, i
   return solution;
 }
 
+void check_lighting_options(const LightingFitOptions& options) {
+  if (options.width < 1 || options.height < 1 || options.width > 4096 || options.height > 2048 ||
+      options.solve_width > 4096 || options.solve_height > 2048)
+    throw Error("lighting maps are at most 4096x2048");
+  if (!(options.ridge > 0.0 && options.ridge <= 1.0)) throw Error("the ridge weight must be in (0, 1]");
+}
+
+double multi_view_fraction(const LightingData& data, int width, int height) {
+  if (width <= 0 || height <= 0) return 0.0;
+  // Which views reflect into each texel of the map.
+  std::vector<int> first_view(size_t(width) * height, -1);
+  std::vector<uint8_t> several(first_view.size(), 0);
+  for (size_t k = 0; k < data.reflected.size(); ++k) {
+    const Vec2 uv = direction_to_latlong(data.reflected[k]);
+    const size_t t = texel_of(uv, width, height);
+    if (first_view[t] < 0) first_view[t] = data.frame[k];
+    else if (first_view[t] != data.frame[k]) several[t] = 1;
+  }
+  const double covered = double(std::count_if(first_view.begin(), first_view.end(), [](int v) { return v >= 0; }));
+  return covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
+}
+
 LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options) {
   const int n = sh_count(data.lmax);
   const size_t count = data.observed.size();
   if (count < size_t(n))
     throw Error("lighting recovery needs at least " + std::to_string(n) + " samples for lmax " + std::to_string(data.lmax) +
                 ", got " + std::to_string(count));
-  if (options.width < 1 || options.height < 1 || options.width > 4096 || options.height > 2048 ||
-      options.solve_width > 4096 || options.solve_height > 2048)
-    throw Error("lighting maps are at most 4096x2048");
-  if (!(options.ridge > 0.0 && options.ridge <= 1.0)) throw Error("the ridge weight must be in (0, 1]");
+  check_lighting_options(options);
   LightingFit fit;
   fit.coefficients = ShCoefficients(data.lmax);
   Eigen::MatrixXd L(n, 3);
-  if (options.solve_width > 0) {
-    // Which views reflect into each texel of the solve map.
-    std::vector<int> first_view(size_t(options.solve_width) * options.solve_height, -1);
-    std::vector<uint8_t> several(first_view.size(), 0);
-    for (size_t k = 0; k < count; ++k) {
-      const Vec2 uv = direction_to_latlong(data.reflected[k]);
-      const size_t t = texel_of(uv, options.solve_width, options.solve_height);
-      if (first_view[t] < 0) first_view[t] = data.frame[k];
-      else if (first_view[t] != data.frame[k]) several[t] = 1;
-    }
-    const double covered = double(std::count_if(first_view.begin(), first_view.end(), [](int v) { return v >= 0; }));
-    fit.multi_view_fraction = covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
-    fit.map_consistent = fit.multi_view_fraction >= 0.5;
-  }
+  fit.multi_view_fraction = multi_view_fraction(data, options.solve_width, options.solve_height);
+  fit.map_consistent = fit.multi_view_fraction >= kMapConsistentFraction;
   std::optional<MapConsistentSystem> system;
   if (fit.map_consistent) system.emplace(data, options.solve_width, options.solve_height, options.ridge);
   std::array<double, 3> condition{};
