@@ -251,7 +251,7 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const
   const JointFit first = joint_pass(data, cross, options, first_options, 10 * kR0Tolerance, observer);
   // The bands above lmax from the first pass's lighting and material.
   const DiffuseBandsAbove above = predict_diffuse_bands(first.lighting.map, diffuse_lmax, first.R0, first.Rd);
-  data = gather_lighting_data(samples, captures, tracer, data.lmax, footprint, &above);
+  take_off_diffuse_bands(data, samples, captures, tracer, footprint, above);
   joint.start_R0 = first.R0;
   JointFit second = joint_pass(data, cross, options, joint, kR0Tolerance, observer);
   second.iterations += first.iterations, second.evaluations += first.evaluations;

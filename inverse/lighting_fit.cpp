@@ -33,9 +33,17 @@ struct Moments {
 
 }  // namespace
 
-LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint, const DiffuseBandsAbove* above) {
+namespace {
+
+// The rows and the moments of the samples, from their footprint rays (footprint.h). With
+// `above`, each observation is taken less those bands' diffuse radiance, and when
+// `observations_only` the data already hold these samples' rows (and the moments that
+// depend on them alone: aa ... cc): only the observations and their moments ao, bo, co
+// are formed again.
+void gather_rows(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int footprint,
+                 const DiffuseBandsAbove* above, bool observations_only, LightingData& data) {
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
+  const int lmax = data.lmax;
   // E(n) of the bands above lmax alone.
   std::optional<ShDiffuseSum> above_sum;
   if (above && above->lighting.lmax > lmax) {
@@ -43,25 +51,24 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
     std::fill(bands.values.begin(), bands.values.begin() + sh_count(lmax), RGBd::Zero());
     above_sum.emplace(bands);
   }
+  data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
   const int n = sh_count(lmax);
   const size_t count = samples.samples.size();
   std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
   for (int l = 0; l <= lmax; ++l)
     for (int m = -l; m <= l; ++m) kernel[sh_index(l, m)] = sh_lambda(l) * sh_kernel_coefficient(l);
-
-  LightingData data;
-  data.lmax = lmax;
-  data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
-  data.c.assign(count * n, 0.0f);
-  data.reflected.resize(count);
-  data.mu.resize(count);
+  if (!observations_only) {
+    data.c.assign(count * n, 0.0f);
+    data.reflected.resize(count);
+    data.mu.resize(count);
+    data.frame.resize(count);
+  }
   data.observed.resize(count);
-  data.frame.resize(count);
   const size_t chunks = (count + kChunk - 1) / kChunk;
   std::vector<Moments> partial(chunks, Moments(n));
   tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
     // The chunk's rows as columns of A, B, C and its observations as rows of O: the
-    // moments are then four matrix products (A A^T, ...), which Eigen vectorises.
+    // moments are then matrix products (A A^T, ...), which Eigen vectorises.
     const size_t first = chunk * kChunk, rows = std::min(count, first + kChunk) - first;
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, rows), B = A, C = A, O(rows, 3);
     Eigen::VectorXd y(n);
@@ -90,21 +97,33 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
       const RGBd removed = above_sum ? RGBd(above->per_lighting * high_bands) : RGBd::Zero();
       const RGB observed = (s.observed.cast<double>() - removed).cast<float>();
       O.row(r) = Eigen::RowVector3d(observed[0], observed[1], observed[2]);
+      data.observed[k] = observed;
+      if (observations_only) continue;
       for (int i = 0; i < n; ++i) data.c[k * n + i] = float(C(i, r));
       data.reflected[k] = reflect(s.view, s.normal);
       data.mu[k] = s.mu;
-      data.observed[k] = observed;
       data.frame[k] = s.frame;
     }
     Moments& m = partial[chunk];
+    m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
+    if (observations_only) return;
     m.aa.noalias() = A * A.transpose(), m.ab.noalias() = A * B.transpose(), m.ac.noalias() = A * C.transpose();
     m.bb.noalias() = B * B.transpose(), m.bc.noalias() = B * C.transpose(), m.cc.noalias() = C * C.transpose();
-    m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
   });
   Moments total(n);
   for (const Moments& m : partial) total += m;
-  data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
   data.ao = total.ao, data.bo = total.bo, data.co = total.co;
+  if (observations_only) return;
+  data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
+}
+
+}  // namespace
+
+LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
+                                  int footprint) {
+  LightingData data;
+  data.lmax = lmax;
+  gather_rows(samples, captures, tracer, footprint, nullptr, false, data);
 
   std::vector<uint8_t> seen(32 * 16, 0);
   for (const Sample& s : samples.samples) {
@@ -121,6 +140,11 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
     }
   data.normal_coverage = covered / total_area;
   return data;
+}
+
+void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
+                            int footprint, const DiffuseBandsAbove& above) {
+  gather_rows(samples, captures, tracer, footprint, &above, true, data);
 }
 
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
@@ -147,28 +171,57 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
     phi = Eigen::Vector3d(1.0, uv.x() * width - (t % width + 0.5), uv.y() * height - (t / width + 0.5));
     return t;
   };
+  const size_t count = data.observed.size();
+  std::vector<int> texel(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    Eigen::Vector3d phi;
+    texel[k] = locate(data.reflected[k], phi);
+  });
+  // The covered texels in the order samples first reach them, and each one's samples in
+  // sample order (a counting sort): the texels are then summed in parallel, each by one
+  // thread in a fixed order, so that the sums do not depend on the thread count.
   std::vector<int> index(size_t(width) * height, -1);
   std::vector<int> covered;
-  Eigen::Vector3d phi;
-  for (const Vec3& r : data.reflected) {
-    const int t = locate(r, phi);
+  for (int t : texel)
     if (index[t] < 0) index[t] = int(covered.size()), covered.push_back(t);
-  }
   const int m = int(covered.size());
+  std::vector<size_t> start(size_t(m) + 1, 0), members(count);
+  for (int t : texel) ++start[size_t(index[t]) + 1];
+  for (int i = 0; i < m; ++i) start[i + 1] += start[i];
+  {
+    std::vector<size_t> next(start.begin(), start.end() - 1);
+    for (size_t k = 0; k < count; ++k) members[next[size_t(index[texel[k]])]++] = k;
+  }
   for (auto* sums : {&phi_phi_, &g_phi_phi_, &gg_phi_phi_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
   for (auto* sums : {&phi_o_, &g_phi_o_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
   phi_c_ = Eigen::MatrixXd::Zero(3 * m, n_), g_phi_c_ = phi_c_;
-  for (size_t k = 0; k < data.observed.size(); ++k) {
-    const int i = index[locate(data.reflected[k], phi)];
-    const double g = coat_transmittance_g(double(data.mu[k]));
-    const Eigen::RowVector3d o = data.observed[k].cast<double>().matrix().transpose();
-    const Eigen::RowVectorXd c = data.c_row(k).transpose().cast<double>();
-    const Eigen::Matrix3d pp = phi * phi.transpose();
-    phi_phi_[i] += pp, g_phi_phi_[i] += g * pp, gg_phi_phi_[i] += g * g * pp;
-    phi_o_[i] += phi * o, g_phi_o_[i] += g * phi * o;
-    phi_c_.middleRows<3>(3 * i) += phi * c, g_phi_c_.middleRows<3>(3 * i) += g * phi * c;
-    oo_ += o.array().square().matrix().transpose();
-  }
+  std::vector<Eigen::Vector3d> texel_oo(size_t(m), Eigen::Vector3d::Zero());
+  tbb::parallel_for(0, m, [&](int i) {
+    // The texel's samples as rows: phi, g phi, c and o; its sums are matrix products.
+    const Eigen::Index rows = Eigen::Index(start[i + 1] - start[i]);
+    Eigen::MatrixX3d phi(rows, 3), g_phi(rows, 3), o(rows, 3);
+    Eigen::MatrixXd c(rows, n_);
+    Eigen::VectorXd g(rows);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const size_t k = members[start[i] + size_t(r)];
+      Eigen::Vector3d offset;
+      locate(data.reflected[k], offset);
+      g[r] = coat_transmittance_g(double(data.mu[k]));
+      phi.row(r) = offset.transpose();
+      g_phi.row(r) = g[r] * offset.transpose();
+      o.row(r) = data.observed[k].cast<double>().matrix().transpose();
+      c.row(r) = data.c_row(k).transpose().cast<double>();
+    }
+    phi_phi_[i].noalias() = phi.transpose() * phi;
+    g_phi_phi_[i].noalias() = phi.transpose() * g_phi;
+    gg_phi_phi_[i].noalias() = g_phi.transpose() * g_phi;
+    phi_o_[i].noalias() = phi.transpose() * o;
+    g_phi_o_[i].noalias() = g_phi.transpose() * o;
+    phi_c_.middleRows<3>(3 * i).noalias() = phi.transpose() * c;
+    g_phi_c_.middleRows<3>(3 * i).noalias() = g_phi.transpose() * c;
+    texel_oo[i] = o.colwise().squaredNorm().transpose();
+  });
+  for (const Eigen::Vector3d& sum : texel_oo) oo_ += sum;
   cc_ = data.cc, co_ = data.co;
   // Projection weights of the texels (solid angle times the basis at the centre; the
   // gradient integrates to zero over a texel), and Q = G P with G = (I - P_u Y_u^T)^-1
@@ -448,7 +501,7 @@ LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples,
   first_options.solve_width = 0;
   const LightingFit first = fit_lighting(data, R0, Rd, first_options);
   const DiffuseBandsAbove above = predict_diffuse_bands(first.map, diffuse_lmax, R0, Rd);
-  data = gather_lighting_data(samples, captures, tracer, data.lmax, footprint, &above);
+  take_off_diffuse_bands(data, samples, captures, tracer, footprint, above);
   return fit_lighting(data, R0, Rd, options);
 }
 

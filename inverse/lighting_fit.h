@@ -63,11 +63,18 @@ struct DiffuseBandsAbove {
   RGBd per_lighting = RGBd::Zero();  // 21/(20 pi) (1 - R0) Rd: radiance per unit of g E(n)
 };
 
-// With `above`, each observation is taken less the diffuse radiance of those bands
-// (through the same pixel footprint as the model rows), so that what remains is what the
-// fit's lmax models.
+// The samples' model rows at lmax, each pixel modelled by footprint x footprint rays
+// (footprint.h), and their moments.
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint, const DiffuseBandsAbove* above = nullptr);
+                                  int footprint);
+
+// Replaces the observations of `data` (gathered from these samples at this footprint) by
+// the captured ones less the diffuse radiance of the bands `above` (through the same pixel
+// footprint as the model rows), so that what remains is what the fit's lmax models. Only
+// what depends on the observations is formed again (observed, ao, bo, co): the rows and
+// their own moments stay.
+void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
+                            int footprint, const DiffuseBandsAbove& above);
 
 // The bands up to diffuse_lmax of a recovered lighting map (SH-projected), under the
 // material (R0, Rd). The prediction needs the map's detail more than its level: a joint
