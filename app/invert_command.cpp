@@ -13,6 +13,8 @@
 #include "renderer/error.h"
 #include "renderer/sh.h"
 
+#include <tbb/task_arena.h>
+
 #include <filesystem>
 
 namespace glaze {
@@ -20,7 +22,8 @@ namespace glaze {
 int command_invert_fit(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
                              "env-scale", "env-rotation", "holdout", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
-                             "Rd", "env-res", "ridge", "solve-res", "diffuse-lmax", "frames", "screenshot", "exposure", "tone-map"},
+                             "Rd", "env-res", "ridge", "solve-res", "diffuse-lmax", "frames", "screenshot", "exposure", "tone-map",
+                             "threads"},
                        {"preview"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
     throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");
@@ -60,9 +63,16 @@ int command_invert_fit(const std::vector<std::string>& raw) {
     parse_tone_mapping(args.text("tone-map", "filmic"));
     args.real("exposure", 0.0f);
   }
+  const int threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
   const std::filesystem::path out(args.text("out", ""));
+  // The fit's parallel loops run in an arena of --threads workers; their sums are formed
+  // in fixed chunks, so the results do not depend on it (InvertFit.ResultsDoNotDependOnThreads).
   auto invert = [&](FitPreview* preview) {
-    return lighting ? invert_fit::invert_lighting(args, out, mode == "joint", preview) : invert_fit::invert_material(args, out, mode, preview);
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    return arena.execute([&] {
+      return lighting ? invert_fit::invert_lighting(args, out, mode == "joint", preview)
+                      : invert_fit::invert_material(args, out, mode, preview);
+    });
   };
   if (!args.has("preview")) {
     if (args.has("frames") || args.has("screenshot") || args.has("exposure") || args.has("tone-map"))

@@ -109,6 +109,7 @@ options of `invert-fit`:
                       with the bands lmax+1..N predicted from the first pass's lighting
                       (N <= lmax: off; sh captures: at most their own lmax)
   --mode joint:       as lighting, without the material; --solve-res default 128x64
+  --threads N         worker threads (default: all cores; the results do not depend on it)
   --preview           a window: each view observed, predicted and |residual| x8,
                       updated as the solver iterates (--frames N --screenshot F.png,
                       --exposure, --tone-map as for preview)
