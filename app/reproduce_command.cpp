@@ -232,7 +232,7 @@ class Reproduction {
   void fit(const Lighting& l, const std::string& object, const std::string& mode, std::vector<std::string> args) {
     const fs::path out = fit_dir(l, object, mode);
     args.insert(args.end(), {"--out", out.string()});
-    time("fits/" + l.name + "/" + object + "/" + mode, step(mode + " fit: " + object + " sphere, " + l.name, command_invert_fit, args));
+    time("fits/" + l.name + "/" + object + "/" + mode, step(mode + " fit: " + object + " sphere, " + l.name, command_invert_fit, with_threads(args, s_)));
     fits_[l.name][object][mode] = read_json(out / "fit.json");
   }
 

@@ -234,7 +234,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 }
 
 JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                             const RayTracer& tracer, int footprint, int diffuse_lmax, const LightingFitOptions& options,
+                             const RayTracer& tracer, int diffuse_lmax, const LightingFitOptions& options,
                              JointFitOptions joint, const FitObserver& observer) {
   if (joint.band_limited_diffuse || diffuse_lmax <= data.lmax) return fit_joint(data, samples, options, joint, observer);
   // The first pass only predicts the bands, for which round 1's R0 is close enough (a
@@ -251,7 +251,7 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const
   const JointFit first = joint_pass(data, cross, options, first_options, 10 * kR0Tolerance, observer);
   // The bands above lmax from the first pass's lighting and material.
   const DiffuseBandsAbove above = predict_diffuse_bands(first.lighting.map, diffuse_lmax, first.R0, first.Rd);
-  take_off_diffuse_bands(data, samples, captures, tracer, footprint, above);
+  take_off_diffuse_bands(data, samples, captures, tracer, above);
   joint.start_R0 = first.R0;
   JointFit second = joint_pass(data, cross, options, joint, kR0Tolerance, observer);
   second.iterations += first.iterations, second.evaluations += first.evaluations;

@@ -20,30 +20,28 @@ namespace {
 // depend on the thread count.
 constexpr size_t kChunk = 2048;
 
+// The moments of a set of rows: with the observations' alone, those of the rows among
+// themselves (aa ... cc) are empty.
 struct Moments {
   Eigen::MatrixXd aa, ab, ac, bb, bc, cc, ao, bo, co;
-  explicit Moments(int n)
-      : aa(Eigen::MatrixXd::Zero(n, n)), ab(aa), ac(aa), bb(aa), bc(aa), cc(aa),
-        ao(Eigen::MatrixXd::Zero(n, 3)), bo(ao), co(ao) {}
+  Moments(int n, bool observations_only)
+      : aa(Eigen::MatrixXd::Zero(observations_only ? 0 : n, observations_only ? 0 : n)), ab(aa), ac(aa), bb(aa), bc(aa),
+        cc(aa), ao(Eigen::MatrixXd::Zero(n, 3)), bo(ao), co(ao) {}
   Moments& operator+=(const Moments& m) {
     aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co;
     return *this;
   }
 };
 
-}  // namespace
-
-namespace {
-
 // The rows and the moments of the samples, from their footprint rays (footprint.h). With
 // `above`, each observation is taken less those bands' diffuse radiance, and when
 // `observations_only` the data already hold these samples' rows (and the moments that
 // depend on them alone: aa ... cc): only the observations and their moments ao, bo, co
 // are formed again.
-void gather_rows(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int footprint,
+void gather_rows(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
                  const DiffuseBandsAbove* above, bool observations_only, LightingData& data) {
+  const int lmax = data.lmax, footprint = data.footprint;
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
-  const int lmax = data.lmax;
   // E(n) of the bands above lmax alone.
   std::optional<ShDiffuseSum> above_sum;
   if (above && above->lighting.lmax > lmax) {
@@ -51,7 +49,6 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
     std::fill(bands.values.begin(), bands.values.begin() + sh_count(lmax), RGBd::Zero());
     above_sum.emplace(bands);
   }
-  data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
   const int n = sh_count(lmax);
   const size_t count = samples.samples.size();
   std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
@@ -63,9 +60,11 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
     data.mu.resize(count);
     data.frame.resize(count);
   }
-  data.observed.resize(count);
+  // The observations are replaced last, with their moments, so that `data` stays whole
+  // when an exception leaves.
+  std::vector<RGB> observations(count);
   const size_t chunks = (count + kChunk - 1) / kChunk;
-  std::vector<Moments> partial(chunks, Moments(n));
+  std::vector<Moments> partial(chunks, Moments(n, observations_only));
   tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
     // The chunk's rows as columns of A, B, C and its observations as rows of O: the
     // moments are then matrix products (A A^T, ...), which Eigen vectorises.
@@ -97,7 +96,7 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
       const RGBd removed = above_sum ? RGBd(above->per_lighting * high_bands) : RGBd::Zero();
       const RGB observed = (s.observed.cast<double>() - removed).cast<float>();
       O.row(r) = Eigen::RowVector3d(observed[0], observed[1], observed[2]);
-      data.observed[k] = observed;
+      observations[k] = observed;
       if (observations_only) continue;
       for (int i = 0; i < n; ++i) data.c[k * n + i] = float(C(i, r));
       data.reflected[k] = reflect(s.view, s.normal);
@@ -110,8 +109,10 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
     m.aa.noalias() = A * A.transpose(), m.ab.noalias() = A * B.transpose(), m.ac.noalias() = A * C.transpose();
     m.bb.noalias() = B * B.transpose(), m.bc.noalias() = B * C.transpose(), m.cc.noalias() = C * C.transpose();
   });
-  Moments total(n);
+  Moments total(n, observations_only);
   for (const Moments& m : partial) total += m;
+  data.observed = std::move(observations);
+  data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
   data.ao = total.ao, data.bo = total.bo, data.co = total.co;
   if (observations_only) return;
   data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
@@ -123,7 +124,8 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
                                   int footprint) {
   LightingData data;
   data.lmax = lmax;
-  gather_rows(samples, captures, tracer, footprint, nullptr, false, data);
+  data.footprint = footprint;
+  gather_rows(samples, captures, tracer, nullptr, false, data);
 
   std::vector<uint8_t> seen(32 * 16, 0);
   for (const Sample& s : samples.samples) {
@@ -143,8 +145,11 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
 }
 
 void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
-                            int footprint, const DiffuseBandsAbove& above) {
-  gather_rows(samples, captures, tracer, footprint, &above, true, data);
+                            const DiffuseBandsAbove& above) {
+  if (data.observed.size() != samples.samples.size() || data.c.size() != samples.samples.size() * size_t(sh_count(data.lmax)))
+    throw Error("internal: the diffuse bands are taken off data gathered from other samples (" +
+                std::to_string(data.observed.size()) + " against " + std::to_string(samples.samples.size()) + ")");
+  gather_rows(samples, captures, tracer, &above, true, data);
 }
 
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
@@ -173,10 +178,8 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   };
   const size_t count = data.observed.size();
   std::vector<int> texel(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    Eigen::Vector3d phi;
-    texel[k] = locate(data.reflected[k], phi);
-  });
+  std::vector<Eigen::Vector3d> offset(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) { texel[k] = locate(data.reflected[k], offset[k]); });
   // The covered texels in the order samples first reach them, and each one's samples in
   // sample order (a counting sort): the texels are then summed in parallel, each by one
   // thread in a fixed order, so that the sums do not depend on the thread count.
@@ -201,14 +204,11 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
     const Eigen::Index rows = Eigen::Index(start[i + 1] - start[i]);
     Eigen::MatrixX3d phi(rows, 3), g_phi(rows, 3), o(rows, 3);
     Eigen::MatrixXd c(rows, n_);
-    Eigen::VectorXd g(rows);
     for (Eigen::Index r = 0; r < rows; ++r) {
       const size_t k = members[start[i] + size_t(r)];
-      Eigen::Vector3d offset;
-      locate(data.reflected[k], offset);
-      g[r] = coat_transmittance_g(double(data.mu[k]));
-      phi.row(r) = offset.transpose();
-      g_phi.row(r) = g[r] * offset.transpose();
+      const double g = coat_transmittance_g(double(data.mu[k]));
+      phi.row(r) = offset[k].transpose();
+      g_phi.row(r) = g * offset[k].transpose();
       o.row(r) = data.observed[k].cast<double>().matrix().transpose();
       c.row(r) = data.c_row(k).transpose().cast<double>();
     }
@@ -490,7 +490,7 @@ DiffuseBandsAbove predict_diffuse_bands(const Image& map, int diffuse_lmax, floa
 }
 
 LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                                   const RayTracer& tracer, int footprint, int diffuse_lmax, float R0, const RGB& Rd,
+                                   const RayTracer& tracer, int diffuse_lmax, float R0, const RGB& Rd,
                                    const LightingFitOptions& options) {
   if (diffuse_lmax <= data.lmax) return fit_lighting(data, R0, Rd, options);
   // The first fit's map only predicts the bands: the SH-only least squares under it does
@@ -501,7 +501,7 @@ LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples,
   first_options.solve_width = 0;
   const LightingFit first = fit_lighting(data, R0, Rd, first_options);
   const DiffuseBandsAbove above = predict_diffuse_bands(first.map, diffuse_lmax, R0, Rd);
-  take_off_diffuse_bands(data, samples, captures, tracer, footprint, above);
+  take_off_diffuse_bands(data, samples, captures, tracer, above);
   return fit_lighting(data, R0, Rd, options);
 }
 

@@ -29,6 +29,7 @@ namespace glaze {
 // (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
 struct LightingData {
   int lmax = 0;
+  int footprint = 1;  // rays per side of each pixel's model (footprint.h)
   // The observations' diffuse bands lmax+1 .. diffuse_lmax were taken off them
   // (DiffuseBandsAbove below); lmax when none were.
   int diffuse_lmax = 0;
@@ -68,13 +69,13 @@ struct DiffuseBandsAbove {
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
                                   int footprint);
 
-// Replaces the observations of `data` (gathered from these samples at this footprint) by
+// Replaces the observations of `data` (gathered from these samples) by
 // the captured ones less the diffuse radiance of the bands `above` (through the same pixel
 // footprint as the model rows), so that what remains is what the fit's lmax models. Only
 // what depends on the observations is formed again (observed, ao, bo, co): the rows and
 // their own moments stay.
 void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
-                            int footprint, const DiffuseBandsAbove& above);
+                            const DiffuseBandsAbove& above);
 
 // The bands up to diffuse_lmax of a recovered lighting map (SH-projected), under the
 // material (R0, Rd). The prediction needs the map's detail more than its level: a joint
@@ -187,12 +188,12 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
 
 // For captures whose diffuse term has every band (photographs, the path tracer): a first
 // fit, then a second on the observations less the bands lmax+1 .. diffuse_lmax that the
-// first one's map predicts (above); `data`, gathered at (captures, tracer, footprint),
+// first one's map predicts (above); `data`, gathered from (samples, captures, tracer),
 // receives the second's observations. One correction, not an iteration: a third fit
 // moves L_lm by at most 0.03% of L00 (measured on path-traced and noise-free full-band
 // captures of both spheres in the rooms). diffuse_lmax <= data.lmax: fit_lighting alone.
 LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                                   const RayTracer& tracer, int footprint, int diffuse_lmax, float R0, const RGB& Rd,
+                                   const RayTracer& tracer, int diffuse_lmax, float R0, const RGB& Rd,
                                    const LightingFitOptions& options);
 
 // Relative RMSE of the recovered map against a known environment, both box-filtered to

@@ -81,8 +81,9 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
     }
   };
 
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
+  // threads 0: the caller's arena (all cores, or what an enclosing arena allows, such as
+  // invert-fit --threads for its re-renders).
+  auto render_rows = [&] {
     // The K x K grid, a sub-row at a time (k rays per pixel along it, so that the lanes
     // see neighbouring rays).
     tbb::parallel_for(0, camera.height, [&](int y) {
@@ -157,7 +158,9 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
           [&](int ray, const RGB& radiance) { sums[owner(ray)] += radiance; });
       for (size_t p = 0; p < refine.size(); ++p) image.set(refine[p].x, y, sums[p] / float(refine[p].grid * refine[p].grid));
     });
-  });
+  };
+  if (options.threads > 0) tbb::task_arena(options.threads).execute(render_rows);
+  else render_rows();
   return image;
 }
 

@@ -25,7 +25,7 @@ struct ShIntegratorOptions {
   int lmax = 4;                   // SH band limit of the lighting
   int supersampling = 2;          // K: K x K samples per pixel
   bool black_background = false;  // camera rays that miss return 0
-  int threads = 0;                // 0: all cores
+  int threads = 0;                // 0: the caller's arena (all cores by default)
   bool clamp_diffuse = true;      // clamp a negative (ringing) diffuse sum at zero
   // M > K: a pixel where the K x K samples' luminance bends by more than refine_contrast
   // of the pixel's (a second difference on the lattice of samples: a silhouette, the edge

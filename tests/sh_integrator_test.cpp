@@ -122,7 +122,9 @@ TEST(ShIntegratorAcceptance, RealMapsAgreeUpToTruncation) {
     const ModelErrors e = measure(path.string());
     expect_model_agrees_up_to_truncation(e);
     EXPECT_LT(e.by_lmax.at(8), 0.01);
-    if (spread) EXPECT_LT(e.by_lmax.at(4), 0.01);
+    if (spread) {
+      EXPECT_LT(e.by_lmax.at(4), 0.01);
+    }
   }
 }
 
