@@ -127,6 +127,11 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["converged"] = joint_fit->converged;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
+  } else {
+    // A linear least-squares solve: no iterations, and converged when it is finite.
+    result["iterations"] = 0;
+    result["converged"] = std::isfinite(fit.rms);
+    result["rms"] = fit.rms;
   }
   if (options.solve_width > 0 && !fit.map_consistent)
     warn("only " + std::to_string(int(100 * fit.multi_view_fraction)) +

@@ -24,11 +24,12 @@ constexpr size_t kChunk = 2048;
 // themselves (aa ... cc) are empty.
 struct Moments {
   Eigen::MatrixXd aa, ab, ac, bb, bc, cc, ao, bo, co;
+  Eigen::Vector3d oo = Eigen::Vector3d::Zero();
   Moments(int n, bool observations_only)
       : aa(Eigen::MatrixXd::Zero(observations_only ? 0 : n, observations_only ? 0 : n)), ab(aa), ac(aa), bb(aa), bc(aa),
         cc(aa), ao(Eigen::MatrixXd::Zero(n, 3)), bo(ao), co(ao) {}
   Moments& operator+=(const Moments& m) {
-    aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co;
+    aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co, oo += m.oo;
     return *this;
   }
 };
@@ -105,6 +106,7 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
     }
     Moments& m = partial[chunk];
     m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
+    m.oo = O.colwise().squaredNorm().transpose();
     if (observations_only) return;
     m.aa.noalias() = A * A.transpose(), m.ab.noalias() = A * B.transpose(), m.ac.noalias() = A * C.transpose();
     m.bb.noalias() = B * B.transpose(), m.bc.noalias() = B * C.transpose(), m.cc.noalias() = C * C.transpose();
@@ -113,7 +115,7 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
   for (const Moments& m : partial) total += m;
   data.observed = std::move(observations);
   data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
-  data.ao = total.ao, data.bo = total.bo, data.co = total.co;
+  data.ao = total.ao, data.bo = total.bo, data.co = total.co, data.oo = total.oo;
   if (observations_only) return;
   data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
 }
@@ -153,7 +155,7 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
 }
 
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
-                                  double* condition) {
+                                  double* condition, double* squared_error) {
   // Row = a - q b + s c with q = 1 - R0, s = 21/(20 pi) Rd q (shading.h's affine form).
   const double q = 1.0 - R0, s = kDiffuseNormalisation * Rd * q;
   const Eigen::MatrixXd normal = data.aa - q * (data.ab + data.ab.transpose()) + s * (data.ac + data.ac.transpose()) +
@@ -164,7 +166,10 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
   if (condition) *condition = smallest > 0.0 ? std::sqrt(largest / smallest) : INFINITY;
   const double lambda = ridge * normal.diagonal().mean();
   const Eigen::MatrixXd regularised = normal + lambda * Eigen::MatrixXd::Identity(normal.rows(), normal.cols());
-  return regularised.ldlt().solve(rhs);
+  const Eigen::VectorXd L = regularised.ldlt().solve(rhs);
+  // sum (o - row.L)^2 = sum o^2 - 2 L.rhs + L^T N L, from the moments.
+  if (squared_error) *squared_error = std::max(0.0, data.oo[channel] - 2.0 * L.dot(rhs) + L.dot(normal * L));
+  return L;
 }
 
 MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge)
@@ -198,7 +203,6 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   for (auto* sums : {&phi_phi_, &g_phi_phi_, &gg_phi_phi_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
   for (auto* sums : {&phi_o_, &g_phi_o_}) sums->assign(size_t(m), Eigen::Matrix3d::Zero());
   phi_c_ = Eigen::MatrixXd::Zero(3 * m, n_), g_phi_c_ = phi_c_;
-  std::vector<Eigen::Vector3d> texel_oo(size_t(m), Eigen::Vector3d::Zero());
   tbb::parallel_for(0, m, [&](int i) {
     // The texel's samples as rows: phi, g phi, c and o; its sums are matrix products.
     const Eigen::Index rows = Eigen::Index(start[i + 1] - start[i]);
@@ -219,10 +223,8 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
     g_phi_o_[i].noalias() = g_phi.transpose() * o;
     phi_c_.middleRows<3>(3 * i).noalias() = phi.transpose() * c;
     g_phi_c_.middleRows<3>(3 * i).noalias() = g_phi.transpose() * c;
-    texel_oo[i] = o.colwise().squaredNorm().transpose();
   });
-  for (const Eigen::Vector3d& sum : texel_oo) oo_ += sum;
-  cc_ = data.cc, co_ = data.co;
+  cc_ = data.cc, co_ = data.co, oo_ = data.oo;
   // Projection weights of the texels (solid angle times the basis at the centre; the
   // gradient integrates to zero over a texel), and Q = G P with G = (I - P_u Y_u^T)^-1
   // for the uncovered texels.
@@ -386,12 +388,16 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   fit.map_consistent = fit.multi_view_fraction >= kMapConsistentFraction;
   std::optional<MapConsistentSystem> system;
   if (fit.map_consistent) system.emplace(data, options.solve_width, options.solve_height, options.ridge);
-  std::array<double, 3> condition{};
+  std::array<double, 3> condition{}, squared{};
   tbb::parallel_for(0, 3, [&](int c) {  // the channels are independent
-    L.col(c) = solve_sh_lighting(data, R0, Rd[c], c, options.ridge, &condition[c]);
-    if (system) L.col(c) = system->solve(R0, Rd[c], c).L;
+    L.col(c) = solve_sh_lighting(data, R0, Rd[c], c, options.ridge, &condition[c], &squared[c]);
+    if (system) {
+      const MapConsistentSystem::Solution solution = system->solve(R0, Rd[c], c);
+      L.col(c) = solution.L, squared[c] = solution.squared_error;
+    }
   });
   fit.condition = *std::max_element(condition.begin(), condition.end());
+  fit.rms = std::sqrt((squared[0] + squared[1] + squared[2]) / (3.0 * double(count)));
   for (int i = 0; i < n; ++i) fit.coefficients.values[i] = RGBd(L(i, 0), L(i, 1), L(i, 2));
 
   // The high-resolution part: (o - diffuse) / F splatted along r with weight F^2.

@@ -37,6 +37,7 @@ struct LightingData {
   Eigen::MatrixXd aa, ab, ac, bb, bc, cc;
   // ... and their products with the observations, one column per channel.
   Eigen::MatrixXd ao, bo, co;
+  Eigen::Vector3d oo = Eigen::Vector3d::Zero();  // sum of the squared observations, per channel
   // What the splat needs per sample: c (row-major, sh_count per sample), the reflected
   // direction through the pixel centre and n.v there.
   std::vector<float> c;
@@ -96,6 +97,7 @@ struct LightingFitOptions {
 struct LightingFit {
   ShCoefficients coefficients;
   double condition = 0.0;  // of the least-squares system before the ridge (worst channel)
+  double rms = 0.0;        // of the solved model's residuals (the solve map and L_lm) over samples and channels
   Image map;               // lat-long, world frame (DESIGN §3)
   std::vector<float> covered;  // per texel: 1 if samples reached it with mirror weight (sum F^2 >= 1e-4)
   double covered_fraction = 0.0;
@@ -202,8 +204,8 @@ LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples,
 double map_error(const LightingFit& fit, const Environment& truth, int width, int height, int* cells = nullptr);
 
 // The SH coefficients alone (step 1), for one channel's material; `condition` receives the
-// system's condition number.
+// system's condition number, `squared_error` the sum over samples of the squared residual.
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
-                                  double* condition);
+                                  double* condition, double* squared_error = nullptr);
 
 }  // namespace glaze
