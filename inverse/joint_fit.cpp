@@ -97,7 +97,6 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
 // stop at `tolerance` relative (minimise_bracketed).
 JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const LightingFitOptions& options,
                     const JointFitOptions& joint, double tolerance, const FitObserver& observer) {
-  const size_t count = data.observed.size();
   const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
   const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
   std::vector<double> grid;  // R0 from 0 to 1, finest where coats are (0.02-0.06)
@@ -195,12 +194,10 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
   }
   fit.R0 = float(R0);
   fit.Rd = diffuse_reflectance(R0, d, &lighting);
-  // The rms of the map-consistent model at the result, comparable with --mode lighting's.
-  const MapConsistentSystem::Profile profile = system.profile(R0);
-  double squared = 0.0;
-  for (int c = 0; c < 3; ++c) squared += profile.squared_error(fit.Rd[c], c);
-  fit.rms = std::sqrt(squared / (3.0 * count));
-  fit.lighting = fit_lighting(data, fit.R0, fit.Rd, options);
+  // pair_views made sure the map-consistent solve applies, so fit_lighting takes `system`;
+  // its rms, of that model at the result, is the joint fit's (as --mode lighting reports).
+  fit.lighting = fit_lighting(data, fit.R0, fit.Rd, options, &system);
+  fit.rms = fit.lighting.rms;
   // With a band-limited diffuse term L_lm is the diffuse field's: d / (21/(20 pi) (1 - R0)
   // Rd), exact where d is, and consistent with Rd when Rd met its bound (a matte coat,
   // where the views' mirror estimates leave much of the sphere unseen); for a black

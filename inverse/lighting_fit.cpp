@@ -374,7 +374,8 @@ double multi_view_fraction(const LightingData& data, int width, int height) {
   return covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
 }
 
-LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options) {
+LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options,
+                         const MapConsistentSystem* built) {
   const int n = sh_count(data.lmax);
   const size_t count = data.observed.size();
   if (count < size_t(n))
@@ -386,8 +387,9 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   Eigen::MatrixXd L(n, 3);
   fit.multi_view_fraction = multi_view_fraction(data, options.solve_width, options.solve_height);
   fit.map_consistent = fit.multi_view_fraction >= kMapConsistentFraction;
-  std::optional<MapConsistentSystem> system;
-  if (fit.map_consistent) system.emplace(data, options.solve_width, options.solve_height, options.ridge);
+  std::optional<MapConsistentSystem> own;
+  if (fit.map_consistent && !built) own.emplace(data, options.solve_width, options.solve_height, options.ridge);
+  const MapConsistentSystem* system = fit.map_consistent ? (built ? built : &*own) : nullptr;
   std::array<double, 3> condition{}, squared{};
   tbb::parallel_for(0, 3, [&](int c) {  // the channels are independent
     L.col(c) = solve_sh_lighting(data, R0, Rd[c], c, options.ridge, &condition[c], &squared[c]);

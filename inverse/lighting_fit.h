@@ -185,8 +185,12 @@ double multi_view_fraction(const LightingData& data, int width, int height);
 // The least fraction at which fit_lighting takes the map-consistent solve.
 inline constexpr double kMapConsistentFraction = 0.5;
 
-// Throws glaze::Error with fewer samples than unknowns.
-LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options);
+// Throws glaze::Error with fewer samples than unknowns. `built`, when given, is the
+// map-consistent system of (data, options.solve_width, options.solve_height,
+// options.ridge) that the caller already has (the joint fit's), used instead of building
+// it again.
+LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, const LightingFitOptions& options,
+                         const MapConsistentSystem* built = nullptr);
 
 // For captures whose diffuse term has every band (photographs, the path tracer): a first
 // fit, then a second on the observations less the bands lmax+1 .. diffuse_lmax that the
