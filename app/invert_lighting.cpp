@@ -91,13 +91,12 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
     joint_options.band_limited_diffuse = band_limited;
-    joint_fit = fit_joint_full_band(data, in.samples, in.captures, *in.tracer, diffuse_lmax, options, joint_options,
-                                    observer);
+    joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
   const LightingFit fit = joint ? joint_fit->lighting
-                                : fit_lighting_full_band(data, in.samples, in.captures, *in.tracer, diffuse_lmax,
-                                                         material.R0(), material.Rd(), options);
+                                : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(),
+                                                         options);
   stage_seconds["fit"] = seconds_since(stage);
 
   std::filesystem::create_directories(out);

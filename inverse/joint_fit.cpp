@@ -230,9 +230,8 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
   return joint_pass(data, cross, options, joint, kR0Tolerance, observer);
 }
 
-JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                             const RayTracer& tracer, int diffuse_lmax, const LightingFitOptions& options,
-                             JointFitOptions joint, const FitObserver& observer) {
+JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax,
+                             const LightingFitOptions& options, JointFitOptions joint, const FitObserver& observer) {
   if (joint.band_limited_diffuse || diffuse_lmax <= data.lmax) return fit_joint(data, samples, options, joint, observer);
   // The first pass only predicts the bands, for which round 1's R0 is close enough (a
   // round 2 typically moves it by under 1e-4; round 0 alone, plain least squares on a
@@ -248,7 +247,7 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const
   const JointFit first = joint_pass(data, cross, options, first_options, 10 * kR0Tolerance, observer);
   // The bands above lmax from the first pass's lighting and material.
   const DiffuseBandsAbove above = predict_diffuse_bands(first.lighting.map, diffuse_lmax, first.R0, first.Rd);
-  take_off_diffuse_bands(data, samples, captures, tracer, above);
+  take_off_diffuse_bands(data, samples, above);
   joint.start_R0 = first.R0;
   JointFit second = joint_pass(data, cross, options, joint, kR0Tolerance, observer);
   second.iterations += first.iterations, second.evaluations += first.evaluations;

@@ -69,11 +69,10 @@ struct JointFitOptions {
 JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
                    const JointFitOptions& joint, const FitObserver& observer = {});
 
-// The two passes for full-band captures (above), on `data` gathered from (samples,
-// captures, tracer); `data` receives the second pass's observations. diffuse_lmax <=
-// data.lmax, or band-limited captures: fit_joint alone.
-JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                             const RayTracer& tracer, int diffuse_lmax, const LightingFitOptions& options,
-                             JointFitOptions joint, const FitObserver& observer = {});
+// The two passes for full-band captures (above), on `data` gathered from `samples`;
+// `data` receives the second pass's observations. diffuse_lmax <= data.lmax, or
+// band-limited captures: fit_joint alone.
+JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax,
+                             const LightingFitOptions& options, JointFitOptions joint, const FitObserver& observer = {});
 
 }  // namespace glaze

@@ -34,77 +34,19 @@ struct Moments {
   }
 };
 
-// The rows and the moments of the samples, from their footprint rays (footprint.h). With
-// `above`, each observation is taken less those bands' diffuse radiance, and when
-// `observations_only` the data already hold these samples' rows (and the moments that
-// depend on them alone: aa ... cc): only the observations and their moments ao, bo, co
-// are formed again.
-void gather_rows(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
-                 const DiffuseBandsAbove* above, bool observations_only, LightingData& data) {
-  const int lmax = data.lmax, footprint = data.footprint;
-  if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
-  // E(n) of the bands above lmax alone.
-  std::optional<ShDiffuseSum> above_sum;
-  if (above && above->lighting.lmax > lmax) {
-    ShCoefficients bands = above->lighting;
-    std::fill(bands.values.begin(), bands.values.begin() + sh_count(lmax), RGBd::Zero());
-    above_sum.emplace(bands);
-  }
-  const int n = sh_count(lmax);
-  const size_t count = samples.samples.size();
-  std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
-  for (int l = 0; l <= lmax; ++l)
-    for (int m = -l; m <= l; ++m) kernel[sh_index(l, m)] = sh_lambda(l) * sh_kernel_coefficient(l);
-  if (!observations_only) {
-    data.c.assign(count * n, 0.0f);
-    data.reflected.resize(count);
-    data.mu.resize(count);
-    data.frame.resize(count);
-  }
-  // The observations are replaced last, with their moments, so that `data` stays whole
-  // when an exception leaves.
-  std::vector<RGB> observations(count);
+// The moments of all samples, chunk by chunk: chunk(first, A, B, C, O) fills the chunk's
+// rows as columns of A, B, C and its observations as rows of O (sized for it), and the
+// moments are then matrix products (A A^T, ...), which Eigen vectorises. With
+// `observations_only` those of the rows among themselves are not formed.
+template <typename Chunk>
+Moments sum_moments(size_t count, int n, bool observations_only, Chunk&& chunk) {
   const size_t chunks = (count + kChunk - 1) / kChunk;
   std::vector<Moments> partial(chunks, Moments(n, observations_only));
-  tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
-    // The chunk's rows as columns of A, B, C and its observations as rows of O: the
-    // moments are then matrix products (A A^T, ...), which Eigen vectorises.
-    const size_t first = chunk * kChunk, rows = std::min(count, first + kChunk) - first;
+  tbb::parallel_for(size_t(0), chunks, [&](size_t index) {
+    const size_t first = index * kChunk, rows = std::min(count, first + kChunk) - first;
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, rows), B = A, C = A, O(rows, 3);
-    Eigen::VectorXd y(n);
-    std::vector<float> basis(n);
-    for (size_t r = 0; r < rows; ++r) {
-      const size_t k = first + r;
-      RGBd high_bands = RGBd::Zero();  // sum of share g E_above(n)
-      for_each_model_pixel(samples, k, captures, tracer, footprint,
-                           [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
-                             sh_eval<float>(lmax, centre_normal, basis);
-                             for (int i = 0; i < n; ++i) y[i] = basis[i] * kernel[i];  // Lambda h Y(n)
-                             const RGBd E_above = above_sum ? RGBd((*above_sum)(centre_normal).cast<double>()) : RGBd::Zero();
-                             const double share = weight / rays.size();
-                             for (const FootprintRay& ray : rays) {
-                               const double g = coat_transmittance_g(ray.hit.normal.dot(ray.view));
-                               sh_eval<float>(lmax, reflect(ray.view, ray.hit.normal), basis);
-                               for (int i = 0; i < n; ++i) {
-                                 A(i, r) += share * basis[i];
-                                 B(i, r) += share * g * basis[i];
-                                 C(i, r) += share * g * y[i];
-                               }
-                               high_bands += share * g * E_above;
-                             }
-                           });
-      const Sample& s = samples.samples[k];
-      const RGBd removed = above_sum ? RGBd(above->per_lighting * high_bands) : RGBd::Zero();
-      const RGB observed = (s.observed.cast<double>() - removed).cast<float>();
-      O.row(r) = Eigen::RowVector3d(observed[0], observed[1], observed[2]);
-      observations[k] = observed;
-      if (observations_only) continue;
-      for (int i = 0; i < n; ++i) data.c[k * n + i] = float(C(i, r));
-      data.reflected[k] = reflect(s.view, s.normal);
-      data.mu[k] = s.mu;
-      data.frame[k] = s.frame;
-    }
-    Moments& m = partial[chunk];
+    chunk(first, A, B, C, O);
+    Moments& m = partial[index];
     m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
     m.oo = O.colwise().squaredNorm().transpose();
     if (observations_only) return;
@@ -113,21 +55,89 @@ void gather_rows(const SampleSet& samples, const CaptureSet& captures, const Ray
   });
   Moments total(n, observations_only);
   for (const Moments& m : partial) total += m;
+  return total;
+}
+
+void set_observations(LightingData& data, std::vector<RGB> observations, const Moments& moments) {
   data.observed = std::move(observations);
-  data.diffuse_lmax = above_sum ? above->lighting.lmax : lmax;
-  data.ao = total.ao, data.bo = total.bo, data.co = total.co, data.oo = total.oo;
-  if (observations_only) return;
-  data.aa = total.aa, data.ab = total.ab, data.ac = total.ac, data.bb = total.bb, data.bc = total.bc, data.cc = total.cc;
+  data.ao = moments.ao, data.bo = moments.bo, data.co = moments.co, data.oo = moments.oo;
 }
 
 }  // namespace
 
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
                                   int footprint) {
+  if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
   LightingData data;
   data.lmax = lmax;
+  data.diffuse_lmax = lmax;
   data.footprint = footprint;
-  gather_rows(samples, captures, tracer, nullptr, false, data);
+  const int n = sh_count(lmax);
+  const size_t count = samples.samples.size();
+  std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
+  for (int l = 0; l <= lmax; ++l)
+    for (int m = -l; m <= l; ++m) kernel[sh_index(l, m)] = sh_lambda(l) * sh_kernel_coefficient(l);
+  for (auto* rows : {&data.a, &data.b, &data.c}) rows->assign(count * n, 0.0f);
+  // The taps are formed per chunk, then joined in sample order.
+  std::vector<std::vector<Vec3>> chunk_tap_normal((count + kChunk - 1) / kChunk);
+  std::vector<std::vector<float>> chunk_tap_share_g(chunk_tap_normal.size());
+  std::vector<uint32_t> taps_of(count);
+  data.reflected.resize(count);
+  data.mu.resize(count);
+  data.frame.resize(count);
+  std::vector<RGB> observations(count);
+  const Moments moments = sum_moments(count, n, false, [&](size_t first, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
+                                                           Eigen::MatrixXd& C, Eigen::MatrixXd& O) {
+    Eigen::VectorXd y(n);
+    std::vector<float> basis(n);
+    std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kChunk];
+    std::vector<float>& tap_share_g = chunk_tap_share_g[first / kChunk];
+    tap_normal.reserve(size_t(O.rows())), tap_share_g.reserve(size_t(O.rows()));  // one per pixel sample
+    for (Eigen::Index r = 0; r < O.rows(); ++r) {
+      const size_t k = first + size_t(r);
+      for_each_model_pixel(samples, k, captures, tracer, footprint,
+                           [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
+                             sh_eval<float>(lmax, centre_normal, basis);
+                             for (int i = 0; i < n; ++i) y[i] = basis[i] * kernel[i];  // Lambda h Y(n)
+                             const double share = weight / rays.size();
+                             double share_g = 0.0;
+                             for (const FootprintRay& ray : rays) {
+                               const double g = coat_transmittance_g(ray.hit.normal.dot(ray.view));
+                               sh_eval<float>(lmax, reflect(ray.view, ray.hit.normal), basis);
+                               for (int i = 0; i < n; ++i) {
+                                 A(i, r) += share * basis[i];
+                                 B(i, r) += share * g * basis[i];
+                                 C(i, r) += share * g * y[i];
+                               }
+                               share_g += share * g;
+                             }
+                             tap_normal.push_back(centre_normal);
+                             tap_share_g.push_back(float(share_g));
+                             ++taps_of[k];
+                           });
+      // The rows are kept as floats, and the moments formed from the kept values, so
+      // that moments formed again later (take_off_diffuse_bands) agree with these.
+      for (int i = 0; i < n; ++i) {
+        data.a[k * n + i] = float(A(i, r)), data.b[k * n + i] = float(B(i, r)), data.c[k * n + i] = float(C(i, r));
+        A(i, r) = data.a[k * n + i], B(i, r) = data.b[k * n + i], C(i, r) = data.c[k * n + i];
+      }
+      const Sample& s = samples.samples[k];
+      O.row(r) = s.observed.cast<double>().matrix().transpose();
+      observations[k] = s.observed;
+      data.reflected[k] = reflect(s.view, s.normal);
+      data.mu[k] = s.mu;
+      data.frame[k] = s.frame;
+    }
+  });
+  data.first_tap.assign(count + 1, 0);
+  for (size_t k = 0; k < count; ++k) data.first_tap[k + 1] = data.first_tap[k] + taps_of[k];
+  for (size_t chunk = 0; chunk < chunk_tap_normal.size(); ++chunk) {
+    data.tap_normal.insert(data.tap_normal.end(), chunk_tap_normal[chunk].begin(), chunk_tap_normal[chunk].end());
+    data.tap_share_g.insert(data.tap_share_g.end(), chunk_tap_share_g[chunk].begin(), chunk_tap_share_g[chunk].end());
+  }
+  set_observations(data, std::move(observations), moments);
+  data.aa = moments.aa, data.ab = moments.ab, data.ac = moments.ac;
+  data.bb = moments.bb, data.bc = moments.bc, data.cc = moments.cc;
 
   std::vector<uint8_t> seen(32 * 16, 0);
   for (const Sample& s : samples.samples) {
@@ -146,12 +156,39 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   return data;
 }
 
-void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
-                            const DiffuseBandsAbove& above) {
-  if (data.observed.size() != samples.samples.size() || data.c.size() != samples.samples.size() * size_t(sh_count(data.lmax)))
+void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const DiffuseBandsAbove& above) {
+  const int n = sh_count(data.lmax);
+  const size_t count = samples.samples.size();
+  if (data.observed.size() != count || data.a.size() != count * n || data.b.size() != count * n ||
+      data.c.size() != count * n || data.first_tap.size() != count + 1)
     throw Error("internal: the diffuse bands are taken off data gathered from other samples (" +
-                std::to_string(data.observed.size()) + " against " + std::to_string(samples.samples.size()) + ")");
-  gather_rows(samples, captures, tracer, &above, true, data);
+                std::to_string(data.observed.size()) + " against " + std::to_string(count) + ")");
+  // E(n) of the bands above lmax alone.
+  std::optional<ShDiffuseSum> above_sum;
+  if (above.lighting.lmax > data.lmax) {
+    ShCoefficients bands = above.lighting;
+    std::fill(bands.values.begin(), bands.values.begin() + n, RGBd::Zero());
+    above_sum.emplace(bands);
+  }
+  // The observations are replaced last, with their moments, so that `data` stays whole
+  // when an exception leaves.
+  std::vector<RGB> observations(count);
+  const Moments moments = sum_moments(count, n, true, [&](size_t first, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
+                                                          Eigen::MatrixXd& C, Eigen::MatrixXd& O) {
+    for (Eigen::Index r = 0; r < O.rows(); ++r) {
+      const size_t k = first + size_t(r);
+      A.col(r) = data.a_row(k).cast<double>(), B.col(r) = data.b_row(k).cast<double>(), C.col(r) = data.c_row(k).cast<double>();
+      // sum share_g E_above(normal) over the taps: the bands' share of the diffuse rows.
+      RGBd E_above = RGBd::Zero();
+      for (uint32_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
+        E_above += double(data.tap_share_g[tap]) * (*above_sum)(data.tap_normal[tap]).cast<double>();
+      const RGB observed = (samples.samples[k].observed.cast<double>() - above.per_lighting * E_above).cast<float>();
+      O.row(r) = observed.cast<double>().matrix().transpose();
+      observations[k] = observed;
+    }
+  });
+  set_observations(data, std::move(observations), moments);
+  data.diffuse_lmax = above_sum ? above.lighting.lmax : data.lmax;
 }
 
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
@@ -409,19 +446,24 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   RGBd mirror_light = RGBd::Zero(), all_light = RGBd::Zero();
   double mirror_total = 0.0;
   const double q = 1.0 - R0;
+  // Each sample's mirror part and texel in parallel, then their sums in sample order, so
+  // that the map does not depend on the thread count.
+  std::vector<RGBd> mirror(count);
+  std::vector<size_t> texel_of_sample(count);
+  const Eigen::Vector3d diffuse_per_L = kDiffuseNormalisation * q * Rd.cast<double>().matrix();
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    const Eigen::Vector3d diffuse = diffuse_per_L.cwiseProduct(L.transpose() * data.c_row(k).cast<double>());
+    mirror[k] = data.observed[k].cast<double>() - diffuse.array();
+    texel_of_sample[k] = texel_of(direction_to_latlong(data.reflected[k]), width, height);
+  });
   for (size_t k = 0; k < count; ++k) {
-    const Eigen::Map<const Eigen::VectorXf> c = data.c_row(k);
-    const Eigen::Vector3d diffuse = kDiffuseNormalisation * q * Rd.cast<double>().matrix().cwiseProduct(L.transpose() * c.cast<double>());
-    const RGBd mirror = data.observed[k].cast<double>() - diffuse.array();
-    const double F = schlick_fresnel(double(R0), double(data.mu[k]));
-    mirror_light += mirror.max(0.0);
-    mirror_total += std::max(0.0, mirror.sum());
+    mirror_light += mirror[k].max(0.0);
+    mirror_total += std::max(0.0, mirror[k].sum());
     all_light += data.observed[k].cast<double>();
+    const double F = schlick_fresnel(double(R0), double(data.mu[k]));
     if (!(F > 0.0)) continue;
-    const Vec2 uv = direction_to_latlong(data.reflected[k]);
-    const size_t texel = texel_of(uv, width, height);
-    sum[texel] += F * mirror;  // weight F^2 times the estimate mirror / F
-    weight[texel] += F * F;
+    sum[texel_of_sample[k]] += F * mirror[k];  // weight F^2 times the estimate mirror / F
+    weight[texel_of_sample[k]] += F * F;
   }
   fit.mirror_share = all_light.sum() > 0.0 ? mirror_total / all_light.sum() : 0.0;
   for (int c = 0; c < 3; ++c) fit.channel_mirror_share[c] = all_light[c] > 0.0 ? mirror_light[c] / all_light[c] : 0.0;
@@ -497,8 +539,7 @@ DiffuseBandsAbove predict_diffuse_bands(const Image& map, int diffuse_lmax, floa
   return {recovered.sh(diffuse_lmax), kDiffuseNormalisation * (1.0 - R0) * Rd.cast<double>()};
 }
 
-LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                                   const RayTracer& tracer, int diffuse_lmax, float R0, const RGB& Rd,
+LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,
                                    const LightingFitOptions& options) {
   if (diffuse_lmax <= data.lmax) return fit_lighting(data, R0, Rd, options);
   // The first fit's map only predicts the bands: the SH-only least squares under it does
@@ -509,7 +550,7 @@ LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples,
   first_options.solve_width = 0;
   const LightingFit first = fit_lighting(data, R0, Rd, first_options);
   const DiffuseBandsAbove above = predict_diffuse_bands(first.map, diffuse_lmax, R0, Rd);
-  take_off_diffuse_bands(data, samples, captures, tracer, above);
+  take_off_diffuse_bands(data, samples, above);
   return fit_lighting(data, R0, Rd, options);
 }
 

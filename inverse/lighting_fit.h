@@ -23,6 +23,9 @@
 
 #include <Eigen/Dense>
 
+#include <cstdint>
+#include <vector>
+
 namespace glaze {
 
 // Per sample, per SH index i, the model row is polished_radiance(R0, Rd, {a_i, b_i, c_i})
@@ -38,9 +41,19 @@ struct LightingData {
   // ... and their products with the observations, one column per channel.
   Eigen::MatrixXd ao, bo, co;
   Eigen::Vector3d oo = Eigen::Vector3d::Zero();  // sum of the squared observations, per channel
-  // What the splat needs per sample: c (row-major, sh_count per sample), the reflected
-  // direction through the pixel centre and n.v there.
-  std::vector<float> c;
+  // The rows themselves (row-major, sh_count per sample), as the moments above were formed
+  // from them: c is what the splat and the map-consistent solve need, a and b what the
+  // observations' moments need again when the observations change
+  // (take_off_diffuse_bands), which then need no ray traced.
+  std::vector<float> a, b, c;
+  // What the diffuse rows c were formed from: per model pixel of a sample (one for a pixel
+  // sample, up to four for a point), its centre's normal and its share times its rays'
+  // mean g(n.v); c = sum over them of share_g Lambda_l h_l Y(normal). Sample k's are
+  // first_tap[k] .. first_tap[k + 1] - 1.
+  std::vector<Vec3> tap_normal;
+  std::vector<float> tap_share_g;
+  std::vector<uint32_t> first_tap;
+  // Per sample: the reflected direction through the pixel centre and n.v there.
   std::vector<Vec3> reflected;
   std::vector<float> mu;
   std::vector<RGB> observed;
@@ -48,10 +61,15 @@ struct LightingData {
   // Fraction of a 32 x 16 lat-long grid of normal directions that samples cover.
   double normal_coverage = 0.0;
 
-  // Sample k's c.
-  Eigen::Map<const Eigen::VectorXf> c_row(size_t k) const {
+  // Sample k's rows.
+  Eigen::Map<const Eigen::VectorXf> a_row(size_t k) const { return row(a, k); }
+  Eigen::Map<const Eigen::VectorXf> b_row(size_t k) const { return row(b, k); }
+  Eigen::Map<const Eigen::VectorXf> c_row(size_t k) const { return row(c, k); }
+
+ private:
+  Eigen::Map<const Eigen::VectorXf> row(const std::vector<float>& rows, size_t k) const {
     const int n = sh_count(lmax);
-    return {&c[k * n], n};
+    return {&rows[k * n], n};
   }
 };
 
@@ -70,13 +88,11 @@ struct DiffuseBandsAbove {
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
                                   int footprint);
 
-// Replaces the observations of `data` (gathered from these samples) by
-// the captured ones less the diffuse radiance of the bands `above` (through the same pixel
-// footprint as the model rows), so that what remains is what the fit's lmax models. Only
-// what depends on the observations is formed again (observed, ao, bo, co): the rows and
-// their own moments stay.
-void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
-                            const DiffuseBandsAbove& above);
+// Replaces the observations of `data` (gathered from these samples) by the captured ones
+// less the diffuse radiance of the bands `above`, so that what remains is what the fit's
+// lmax models. Only what depends on the observations is formed again (observed, ao, bo,
+// co, oo), from the stored rows and taps: no ray is traced.
+void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const DiffuseBandsAbove& above);
 
 // The bands up to diffuse_lmax of a recovered lighting map (SH-projected), under the
 // material (R0, Rd). The prediction needs the map's detail more than its level: a joint
@@ -194,12 +210,11 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
 
 // For captures whose diffuse term has every band (photographs, the path tracer): a first
 // fit, then a second on the observations less the bands lmax+1 .. diffuse_lmax that the
-// first one's map predicts (above); `data`, gathered from (samples, captures, tracer),
-// receives the second's observations. One correction, not an iteration: a third fit
+// first one's map predicts (above); `data`, gathered from `samples`, receives the
+// second's observations. One correction, not an iteration: a third fit
 // moves L_lm by at most 0.03% of L00 (measured on path-traced and noise-free full-band
 // captures of both spheres in the rooms). diffuse_lmax <= data.lmax: fit_lighting alone.
-LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, const CaptureSet& captures,
-                                   const RayTracer& tracer, int diffuse_lmax, float R0, const RGB& Rd,
+LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,
                                    const LightingFitOptions& options);
 
 // Relative RMSE of the recovered map against a known environment, both box-filtered to

@@ -194,7 +194,7 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
     benchmark::DoNotOptimize(
-        fit_lighting_full_band(data, set, captures, tracer, diffuse_lmax, material.R0(), material.Rd(), {}));
+        fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
 }
 void BM_LightingFit3x512(benchmark::State& state) { lighting_fit_benchmark(state, 4); }
@@ -220,7 +220,7 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
-    benchmark::DoNotOptimize(fit_joint_full_band(data, set, captures, tracer, 16, options, joint));
+    benchmark::DoNotOptimize(fit_joint_full_band(data, set, 16, options, joint));
   }
 }
 void BM_JointFit3x512(benchmark::State& state) { joint_fit_benchmark(state, true); }
