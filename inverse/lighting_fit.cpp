@@ -71,7 +71,6 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   LightingData data;
   data.lmax = lmax;
   data.diffuse_lmax = lmax;
-  data.footprint = footprint;
   const int n = sh_count(lmax);
   const size_t count = samples.samples.size();
   std::vector<double> kernel(n);  // Lambda_l h_l, per SH index
@@ -81,7 +80,7 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   // The taps are formed per chunk, then joined in sample order.
   std::vector<std::vector<Vec3>> chunk_tap_normal((count + kChunk - 1) / kChunk);
   std::vector<std::vector<float>> chunk_tap_share_g(chunk_tap_normal.size());
-  std::vector<uint32_t> taps_of(count);
+  std::vector<size_t> taps_of(count);
   data.reflected.resize(count);
   data.mu.resize(count);
   data.frame.resize(count);
@@ -160,7 +159,8 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
   const int n = sh_count(data.lmax);
   const size_t count = samples.samples.size();
   if (data.observed.size() != count || data.a.size() != count * n || data.b.size() != count * n ||
-      data.c.size() != count * n || data.first_tap.size() != count + 1)
+      data.c.size() != count * n || data.first_tap.size() != count + 1 || data.tap_normal.size() != data.first_tap.back() ||
+      data.tap_share_g.size() != data.first_tap.back())
     throw Error("internal: the diffuse bands are taken off data gathered from other samples (" +
                 std::to_string(data.observed.size()) + " against " + std::to_string(count) + ")");
   // E(n) of the bands above lmax alone.
@@ -180,7 +180,7 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
       A.col(r) = data.a_row(k).cast<double>(), B.col(r) = data.b_row(k).cast<double>(), C.col(r) = data.c_row(k).cast<double>();
       // sum share_g E_above(normal) over the taps: the bands' share of the diffuse rows.
       RGBd E_above = RGBd::Zero();
-      for (uint32_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
+      for (size_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
         E_above += double(data.tap_share_g[tap]) * (*above_sum)(data.tap_normal[tap]).cast<double>();
       const RGB observed = (samples.samples[k].observed.cast<double>() - above.per_lighting * E_above).cast<float>();
       O.row(r) = observed.cast<double>().matrix().transpose();

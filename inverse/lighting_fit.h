@@ -23,7 +23,7 @@
 
 #include <Eigen/Dense>
 
-#include <cstdint>
+#include <cstddef>
 #include <vector>
 
 namespace glaze {
@@ -32,7 +32,6 @@ namespace glaze {
 // (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
 struct LightingData {
   int lmax = 0;
-  int footprint = 1;  // rays per side of each pixel's model (footprint.h)
   // The observations' diffuse bands lmax+1 .. diffuse_lmax were taken off them
   // (DiffuseBandsAbove below); lmax when none were.
   int diffuse_lmax = 0;
@@ -52,7 +51,7 @@ struct LightingData {
   // first_tap[k] .. first_tap[k + 1] - 1.
   std::vector<Vec3> tap_normal;
   std::vector<float> tap_share_g;
-  std::vector<uint32_t> first_tap;
+  std::vector<size_t> first_tap;
   // Per sample: the reflected direction through the pixel centre and n.v there.
   std::vector<Vec3> reflected;
   std::vector<float> mu;

@@ -91,6 +91,33 @@ TEST(LightingData, TakingOffTheBandsAboveLmaxGivesTheBandLimitedCaptures) {
   }
 }
 
+// The taps the bands are taken through are those the diffuse rows were formed from: with
+// 4 x 4 rays per pixel and point samples (four pixels each), c = sum over a sample's taps
+// of share_g Lambda_l h_l Y(normal), and the shares add up to the rays' mean g.
+TEST(LightingData, TapsAreWhatTheDiffuseRowsWereFormedFrom) {
+  TemporaryDirectory dir;
+  const Captured points = capture(dir, 4, 2000);
+  const RayTracer tracer(points.object);
+  const LightingData data = gather_lighting_data(points.samples, points.captures, tracer, 4, 4);
+  const size_t count = points.samples.samples.size();
+  ASSERT_EQ(data.first_tap.size(), count + 1);
+  EXPECT_GT(data.first_tap.back(), 3 * count);  // most points blend four pixels
+  const int n = sh_count(4);
+  std::vector<float> basis(n);
+  double worst = 0.0;
+  for (size_t k = 0; k < count; ++k) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+    for (size_t tap = data.first_tap[k]; tap < data.first_tap[k + 1]; ++tap) {
+      sh_eval<float>(4, data.tap_normal[tap], basis);
+      for (int l = 0; l <= 4; ++l)
+        for (int m = -l; m <= l; ++m)
+          c[sh_index(l, m)] += data.tap_share_g[tap] * sh_lambda(l) * sh_kernel_coefficient(l) * basis[sh_index(l, m)];
+    }
+    worst = std::max(worst, (c - data.c_row(k).cast<double>()).cwiseAbs().maxCoeff() / std::abs(double(data.c_row(k)[0])));
+  }
+  EXPECT_LT(worst, 1e-5);
+}
+
 TEST(LightingData, BandsAreNotTakenOffDataOfOtherSamples) {
   TemporaryDirectory dir;
   const Captured full = capture(dir, 16, 0);
