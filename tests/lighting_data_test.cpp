@@ -24,15 +24,19 @@ struct Captured {
 };
 
 // The capture set of the white sphere in the blue room (the lighting whose bands above 4
-// carry the most), rendered by the sh integrator at `lmax` with one ray per pixel, and
-// its samples: pixel samples, or `points` points.
-Captured capture(const TemporaryDirectory& dir, int lmax, int points) {
-  const std::string folder = dir.file("lmax" + std::to_string(lmax) + "_points" + std::to_string(points));
-  const testing::CommandResult render =
+// carry the most), rendered by the sh integrator at `lmax` with one ray per pixel.
+std::string render(const TemporaryDirectory& dir, int lmax) {
+  const std::string folder = dir.file("lmax" + std::to_string(lmax));
+  const testing::CommandResult run =
       testing::run_glaze("render " + testing::scenes_dir() + "white_sphere_blue_room.gltf --captures " + folder +
                              " --integrator sh --ss 1 --res 96x96 --lmax " + std::to_string(lmax),
                          dir);
-  EXPECT_EQ(render.exit_code, 0) << render.err;
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  return folder;
+}
+
+// The set in `folder` and its samples: pixel samples, or `points` points.
+Captured capture(const std::string& folder, int points) {
   Captured c{read_transforms(folder + "/transforms.json"), {}, {}};
   c.object = capture_object_scene(c.captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   const RayTracer tracer(c.object);
@@ -65,9 +69,10 @@ double relative_difference(const std::vector<RGB>& a, const std::vector<RGB>& b)
 // modelled by the same blend of the pixels' rows: the bands come off each pixel's share.
 TEST(LightingData, TakingOffTheBandsAboveLmaxGivesTheBandLimitedCaptures) {
   TemporaryDirectory dir;
+  const std::string full_folder = render(dir, 16), limited_folder = render(dir, 4);
   for (const int points : {0, 2000}) {
     SCOPED_TRACE(points ? "point samples" : "pixel samples");
-    const Captured full = capture(dir, 16, points), limited = capture(dir, 4, points);
+    const Captured full = capture(full_folder, points), limited = capture(limited_folder, points);
     ASSERT_EQ(full.samples.samples.size(), limited.samples.samples.size());
     const RayTracer full_tracer(full.object), limited_tracer(limited.object);
     LightingData data = gather_lighting_data(full.samples, full.captures, full_tracer, 4, 1);
@@ -96,7 +101,7 @@ TEST(LightingData, TakingOffTheBandsAboveLmaxGivesTheBandLimitedCaptures) {
 // of share_g Lambda_l h_l Y(normal), and the shares add up to the rays' mean g.
 TEST(LightingData, TapsAreWhatTheDiffuseRowsWereFormedFrom) {
   TemporaryDirectory dir;
-  const Captured points = capture(dir, 4, 2000);
+  const Captured points = capture(render(dir, 4), 2000);
   const RayTracer tracer(points.object);
   const LightingData data = gather_lighting_data(points.samples, points.captures, tracer, 4, 4);
   const size_t count = points.samples.samples.size();
@@ -120,7 +125,7 @@ TEST(LightingData, TapsAreWhatTheDiffuseRowsWereFormedFrom) {
 
 TEST(LightingData, BandsAreNotTakenOffDataOfOtherSamples) {
   TemporaryDirectory dir;
-  const Captured full = capture(dir, 16, 0);
+  const Captured full = capture(render(dir, 16), 0);
   const RayTracer tracer(full.object);
   LightingData data = gather_lighting_data(full.samples, full.captures, tracer, 4, 1);
   SampleSet fewer = full.samples;
