@@ -93,6 +93,13 @@ class ReflectedMesh {
     }
   }
 
+  // The sample at pixel (i, j) of the film, -1 where none.
+  int64_t sample_at(int i, int j) const {
+    i -= x0_, j -= y0_;
+    if (i < 0 || i >= width_ || j < 0 || j >= height_) return -1;
+    return grid_[size_t(j) * width_ + i];
+  }
+
   // The triangle whose directions contain `r`, and r's barycentric weights in it (the
   // central projection onto its plane); false when no triangle of this view does.
   bool locate(const Vec3& r, std::array<uint32_t, 3>& corners, std::array<float, 3>& weights, double* area = nullptr) const {
@@ -136,9 +143,24 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
   for (uint32_t k = 0; k < samples.samples.size(); ++k) members[samples.samples[k].frame].push_back(k);
   meshes_.reserve(views);
   for (int f = 0; f < views; ++f) meshes_.emplace_back(data, samples, members[f]);
+  const size_t count = samples.samples.size();
+  // Per sample, the change of its reflected direction per pixel along the film's x and y
+  // (central differences where both neighbours exist): its footprint's shape.
+  std::vector<std::array<Vec3, 2>> steps(count, {Vec3::Zero(), Vec3::Zero()});
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    const Sample& s = samples.samples[k];
+    const ReflectedMesh& mesh = meshes_[s.frame];
+    const int i = int(s.film.x()), j = int(s.film.y());
+    for (int axis = 0; axis < 2; ++axis) {
+      const int64_t plus = mesh.sample_at(i + (axis == 0), j + (axis == 1));
+      const int64_t minus = mesh.sample_at(i - (axis == 0), j - (axis == 1));
+      if (plus >= 0 && minus >= 0) steps[k][axis] = 0.5f * (data.reflected[plus] - data.reflected[minus]);
+      else if (plus >= 0) steps[k][axis] = data.reflected[plus] - data.reflected[k];
+      else if (minus >= 0) steps[k][axis] = data.reflected[k] - data.reflected[minus];
+    }
+  });
   // Per sample, its pairs with every other view, gathered in parallel and kept in sample
   // order.
-  const size_t count = samples.samples.size();
   std::vector<std::vector<Pair>> found(count);
   tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const int own = samples.samples[k].frame;
@@ -146,7 +168,14 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
       if (f == own) continue;
       Pair p;
       p.sample = uint32_t(k);
-      if (meshes_[f].locate(data.reflected[k], p.near, p.weight)) found[k].push_back(p);
+      std::array<uint32_t, 3> corners;
+      std::array<float, 3> weights;
+      if (!meshes_[f].locate(data.reflected[k], corners, weights)) continue;
+      p.count = 3;
+      std::copy(corners.begin(), corners.end(), p.near.begin());
+      std::copy(weights.begin(), weights.end(), p.weight.begin());
+      interpolate_quadratically(meshes_[f], samples, steps, p);
+      found[k].push_back(p);
     }
   });
   for (const std::vector<Pair>& list : found) pairs_.insert(pairs_.end(), list.begin(), list.end());
@@ -173,6 +202,60 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
   });
 }
 
+void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
+                                                const std::vector<std::array<Vec3, 2>>& steps, Pair& p) const {
+  // The 3 x 3 pixels around the corner nearest r.
+  const int nearest = int(std::max_element(p.weight.begin(), p.weight.begin() + 3) - p.weight.begin());
+  const Vec2& film = samples.samples[p.near[nearest]].film;
+  std::array<uint32_t, kStencil> members;
+  int n = 0;
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di)
+      if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
+  if (n < 8) return;  // six unknowns, and some to spare against a degenerate layout
+  // Coordinates on the plane tangent at r (the central projection, as the triangles'
+  // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
+  // cells (footprint.h) has a footprint of (K^2 - 1) / (12 K^2) pixels^2 per film axis;
+  // J maps the film's axes to the plane.
+  const Eigen::Vector3d r = data_.reflected[p.sample].cast<double>().normalized();
+  const Eigen::Vector3d helper = std::abs(r.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d e1 = r.cross(helper).normalized(), e2 = r.cross(e1);
+  const double K = data_.footprint, per_axis = (K * K - 1.0) / (12.0 * K * K);
+  auto covariance = [&](uint32_t k) {
+    Eigen::Matrix2d J;
+    for (int axis = 0; axis < 2; ++axis) {
+      const Eigen::Vector3d step = steps[k][axis].cast<double>();
+      J(0, axis) = step.dot(e1), J(1, axis) = step.dot(e2);
+    }
+    return Eigen::Matrix2d(per_axis * J * J.transpose());
+  };
+  // Row j: pixel j's record of L0 + g.u + u^T H u / 2 in the unknowns (L0, g, H_uu, H_uv,
+  // H_vv); the target: sample a's record, at u = 0 with its own footprint.
+  Eigen::Matrix<double, Eigen::Dynamic, 6> A(n, 6);
+  for (int m = 0; m < n; ++m) {
+    const Eigen::Vector3d q = data_.reflected[members[m]].cast<double>();
+    const double along = q.dot(r);
+    if (!(along > 0.5)) return;
+    const double u = q.dot(e1) / along, v = q.dot(e2) / along;
+    const Eigen::Matrix2d S = covariance(members[m]);
+    A.row(m) << 1.0, u, v, 0.5 * (u * u + S(0, 0)), u * v + S(0, 1), 0.5 * (v * v + S(1, 1));
+  }
+  const Eigen::Matrix2d Sa = covariance(p.sample);
+  Eigen::Matrix<double, 6, 1> target;
+  target << 1.0, 0.0, 0.0, 0.5 * Sa(0, 0), Sa(0, 1), 0.5 * Sa(1, 1);
+  // The weights are A (A^T A)^-1 target, the quadratic's value through the records; the
+  // columns scaled to unit norm so that the conditioning test means something.
+  const Eigen::Matrix<double, 6, 1> norms = A.colwise().norm().transpose();
+  if (!(norms.minCoeff() > 0.0)) return;
+  const Eigen::Matrix<double, Eigen::Dynamic, 6> scaled = A * norms.cwiseInverse().asDiagonal();
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> normal(scaled.transpose() * scaled);
+  if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 1e-8 * normal.vectorD().maxCoeff())) return;
+  const Eigen::VectorXd weights = scaled * normal.solve(target.cwiseQuotient(norms));
+  if (!weights.allFinite()) return;
+  p.count = uint32_t(n);
+  for (int m = 0; m < n; ++m) p.near[m] = members[m], p.weight[m] = float(weights(m));
+}
+
 void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::VectorXd> x, Eigen::Ref<Eigen::Vector3d> y,
                                  Eigen::Ref<Eigen::Vector3d> weight) const {
   // o_a - c_a.d - F_a sum_j w_j (o_j - c_j.d) / F_j = y - x.d: its noise variance is
@@ -182,7 +265,7 @@ void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::Vec
   x = data_.c_row(p.sample).cast<double>();
   y = data_.observed[p.sample].cast<double>().matrix();
   Eigen::Vector3d variance = variance_[p.sample].cast<double>().matrix();
-  for (int i = 0; i < 3; ++i) {
+  for (uint32_t i = 0; i < p.count; ++i) {
     const uint32_t j = p.near[i];
     const double ratio = Fa * p.weight[i] / std::max(schlick_fresnel(R0, double(data_.mu[j])), 1e-30);
     x -= ratio * data_.c_row(j).cast<double>();

@@ -70,6 +70,7 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
   LightingData data;
   data.lmax = lmax;
+  data.footprint = footprint;
   data.diffuse_lmax = lmax;
   const int n = sh_count(lmax);
   const size_t count = samples.samples.size();

@@ -32,6 +32,7 @@ namespace glaze {
 // (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
 struct LightingData {
   int lmax = 0;
+  int footprint = 1;  // rays per side of each pixel's model (footprint.h)
   // The observations' diffuse bands lmax+1 .. diffuse_lmax were taken off them
   // (DiffuseBandsAbove below); lmax when none were.
   int diffuse_lmax = 0;
