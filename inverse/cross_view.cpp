@@ -3,6 +3,7 @@
 #include "renderer/error.h"
 #include "renderer/latlong.h"
 #include "renderer/material.h"
+#include "renderer/math.h"
 
 #include <tbb/parallel_for.h>
 
@@ -85,12 +86,9 @@ class ReflectedMesh {
   // The samples at the four pixels beside film point `film` of this view.
   template <typename Visit>
   void for_each_neighbour(const Vec2& film, Visit&& visit) const {
-    const int i = int(film.x()) - x0_, j = int(film.y()) - y0_;
-    for (const auto& [di, dj] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)}) {
-      if (i + di < 0 || i + di >= width_ || j + dj < 0 || j + dj >= height_) continue;
-      const int64_t k = grid_[size_t(j + dj) * width_ + (i + di)];
-      if (k >= 0) visit(uint32_t(k));
-    }
+    const int i = int(film.x()), j = int(film.y());
+    for (const auto& [di, dj] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)})
+      if (const int64_t k = sample_at(i + di, j + dj); k >= 0) visit(uint32_t(k));
   }
 
   // The sample at pixel (i, j) of the film, -1 where none.
@@ -217,9 +215,8 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
   // cells (footprint.h) has a footprint of (K^2 - 1) / (12 K^2) pixels^2 per film axis;
   // J maps the film's axes to the plane.
-  const Eigen::Vector3d r = data_.reflected[p.sample].cast<double>().normalized();
-  const Eigen::Vector3d helper = std::abs(r.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d e1 = r.cross(helper).normalized(), e2 = r.cross(e1);
+  const Frame plane = Frame::from_normal(data_.reflected[p.sample].normalized());
+  const Eigen::Vector3d r = plane.n.cast<double>(), e1 = plane.s.cast<double>(), e2 = plane.t.cast<double>();
   const double K = data_.footprint, per_axis = (K * K - 1.0) / (12.0 * K * K);
   auto covariance = [&](uint32_t k) {
     Eigen::Matrix2d J;
