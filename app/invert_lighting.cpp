@@ -80,7 +80,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   JointFitOptions joint_options;
   FitObserver observer;
   // The lighting at each iterate (one per round of the joint fit) is solved here, on the
-  // fit's thread: the second pass of a full-band fit replaces `data`, which the preview's
+  // fit's thread: the later passes of a full-band fit replace `data`, which the preview's
   // thread must then not be reading.
   if (preview)
     observer = [&](const FitIterate& it) {
@@ -116,7 +116,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
                            {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"}, {"samples", in.samples.samples.size()},
                            {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint},
                            {"band_limited_diffuse", band_limited}, {"diffuse_lmax", data.diffuse_lmax},
-                           {"passes", data.diffuse_lmax > lmax ? 2 : 1}};
+                           {"passes", joint ? joint_fit->passes : data.diffuse_lmax > lmax ? 2 : 1}};
   if (fit.condition > 1e6)
     warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
          std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");

@@ -107,7 +107,8 @@ options of `invert-fit`:
                       --diffuse-lmax N (default 16; 0: off): for captures whose diffuse
                       term has every band (photographs, the path tracer), a second pass
                       with the bands lmax+1..N predicted from the first pass's lighting
-                      (N <= lmax: off; sh captures: at most their own lmax)
+                      (joint: more, each from the last, while R0 moves by 1e-3; at most
+                      4) (N <= lmax: off; sh captures: at most their own lmax)
   --mode joint:       as lighting, without the material; --solve-res default 128x64
   --threads N         worker threads (default: all cores; the results do not depend on it)
   --preview           a window: each view observed, predicted and |residual| x8,

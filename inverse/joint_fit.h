@@ -28,10 +28,11 @@
 // what R0 is read from. fit_joint_full_band predicts those bands (up to diffuse_lmax)
 // from the lighting the first fit recovers at its material (predict_diffuse_bands in
 // lighting_fit.h says why that lighting is good enough), takes them off the
-// observations and fits again from the first R0. (Measured on noise-free captures whose diffuse term has
-// the bands up to 16 (ss 4), white sphere in the blue room, fitted at lmax 4: R0 +0.0066
-// and Rd +0.043 in one pass, +0.0005 and +0.003 after the second; a third changes
-// nothing measurable.)
+// observations and fits again from the first R0; and again from each new fit's lighting
+// while a pass still moves R0 by 1e-3 or more (at most four passes). (Measured on
+// noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
+// white sphere in the blue room, fitted at lmax 4: R0 +0.023 and Rd +0.23 in one pass,
+// +0.0028 and +0.028 after the second, +0.0004 and +0.0056 after the fourth.)
 #pragma once
 
 #include "inverse/fit_progress.h"
@@ -50,6 +51,7 @@ struct JointFit {
   int iterations = 0;    // rounds of step 1 (robust scale, then the search for R0)
   int evaluations = 0;   // of the robust misfit
   bool converged = false;
+  int passes = 1;  // of the fit (fit_joint_full_band: each predicts the bands for the next)
   double rms = 0.0;  // of the map-consistent model over samples and channels
   std::string brief_report, full_report;
 };
@@ -69,8 +71,8 @@ struct JointFitOptions {
 JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
                    const JointFitOptions& joint, const FitObserver& observer = {});
 
-// The two passes for full-band captures (above), on `data` gathered from `samples`;
-// `data` receives the second pass's observations. diffuse_lmax <= data.lmax, or
+// The passes for full-band captures (above), on `data` gathered from `samples`;
+// `data` receives the last pass's observations. diffuse_lmax <= data.lmax, or
 // band-limited captures: fit_joint alone.
 JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax,
                              const LightingFitOptions& options, JointFitOptions joint, const FitObserver& observer = {});
