@@ -31,7 +31,7 @@
 // observations and fits again from the first R0; and again from each new fit's lighting
 // while a pass still moves R0 by 1e-3 or more (at most four passes). (Measured on
 // noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
-// white sphere in the blue room, fitted at lmax 4: R0 +0.023 and Rd +0.23 in one pass,
+// white sphere in the blue room, fitted at lmax 4: R0 +0.022 and Rd +0.23 in one pass,
 // +0.0028 and +0.028 after the second, +0.0004 and +0.0056 after the fourth.)
 #pragma once
 

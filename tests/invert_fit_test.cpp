@@ -349,9 +349,10 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
   }
 }
 
-// Passes go on while one moves R0 by 1e-3 or more (joint_fit.h). Three views (the scene's
-// other two held out) with pixels of 4 x 4 rays, modelled as such, at 256 x 256: the first pass of the white sphere in the blue room is
-// far off (R0 0.061 against 0.0385), and so are the bands it predicts. Measured: two
+// Passes go on while one moves R0 by 1e-3 or more (joint_fit.h). Three views (the
+// scene's other two held out) with pixels of 4 x 4 rays, modelled as such, at 256 x 256:
+// the first pass of the white sphere in the blue room is far off (R0 0.061 against
+// 0.0385), and so are the bands it predicts. Measured: two
 // passes R0 +0.0028, Rd +0.028 +0.029 +0.020, scale 0.960 (which fails every bound below);
 // four (the passes R0 0.061, 0.041, 0.039, 0.0389) +0.0004, +0.0056 +0.0042 +0.0028, 0.992.
 // Asserted: R0 and the scale at the noise-free bounds, Rd at the path-traced one (the
