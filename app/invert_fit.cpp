@@ -102,8 +102,12 @@ std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_l
     const int value = r[key].get<int>();
     return value >= low && value <= high ? value : fallback;
   };
-  if (r.is_object() && r.value("integrator", "") == "sh") return {integer("ss", 1, 16, 4), integer("lmax", 0, kShMaxLmax, otherwise_lmax)};
+  if (noise_free_captures(captures)) return {integer("ss", 1, 16, 4), integer("lmax", 0, kShMaxLmax, otherwise_lmax)};
   return {4, otherwise_lmax};
+}
+
+bool noise_free_captures(const CaptureSet& captures) {
+  return captures.renderer.is_object() && captures.renderer.value("integrator", "") == "sh";
 }
 
 #if GLAZE_HAVE_PREVIEW

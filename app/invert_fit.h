@@ -58,6 +58,10 @@ void write_renders(const Arguments& args, const FitInputs& in, const Scene& scen
 // path tracer's, box-filtered pixel) and `otherwise_lmax`. Returns {footprint, lmax}.
 std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_lmax);
 
+// Whether transforms.json says glaze's sh integrator rendered the captures: those carry no
+// noise (it is deterministic).
+bool noise_free_captures(const CaptureSet& captures);
+
 // --preview (each a no-op when `preview` is null or the build has no preview):
 // hands the window every capture view, observed, and the fit's pixel model;
 void begin_preview(FitPreview* preview, const FitInputs& in, int lmax, int footprint);

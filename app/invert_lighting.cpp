@@ -91,6 +91,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
     joint_options.band_limited_diffuse = band_limited;
+    joint_options.noise_free = noise_free_captures(in.captures);
     joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);

@@ -131,9 +131,93 @@ class ReflectedMesh {
   std::vector<uint32_t> start_, members_;
 };
 
+namespace {
+
+constexpr double kNoiseFloor = CrossViewSystem::kNoiseFloor;
+// The window whose residuals estimate a sample's noise: (2 kNoiseReach + 1)^2 pixels less
+// the 3 x 3 around the sample, widened (doubled) while it holds fewer than kNoiseValues.
+constexpr int kNoiseReach = 4;
+constexpr size_t kNoiseValues = 8;
+
+// Per sample and channel, the variance of the captures' noise around it, estimated from
+// the data. A pixel's noise is what its neighbours do not predict: the residual
+//   e = o - (sum of the 4 edge neighbours) / 2 + (sum of the 4 corner neighbours) / 4
+// vanishes for any cubic in the film's coordinates, so smooth shading and the mirrored
+// lighting's gradients and curvature leave it, and for independent pixel noise of
+// variance v it has variance (1 + 4/4 + 4/16) v = 2.25 v. The mean of e^2 / 2.25 over the
+// window around the sample is its noise variance; the window leaves out the sample and
+// its 8 neighbours, whose residuals contain the sample's own noise, so that a sample's
+// noise does not set its weight. With a floor of kNoiseFloor times the level (the four
+// neighbours' mean, plus 1% of the mean observation).
+//
+// Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
+// is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp
+// captures of the white sphere in the blue room, it is 4% of the level near the normal and
+// 1.5% at n.v = 0.2-0.3, where the mirror carries much of the level; weighting by the
+// level instead (glaze's first model) misweighs the grazing pairs that fix R0, and
+// the joint fit ends at R0 0.009 instead of 0.0385, for every seed. Photographs' noise
+// (shot and read noise) is not proportional to the level either.
+//
+// `noise_free` captures (glaze's sh integrator, which is deterministic) take the floor
+// everywhere. Their residuals e are the signal's detail, not noise: in a channel that
+// only the mirror lights (the red sphere's green and blue) they are the reflected map's
+// texture, 4-9% of the level under St Fagans at one ray per pixel, which would
+// down-weight the detailed pairs for noise they do not have.
+std::vector<RGB> estimate_noise(const LightingData& data, const SampleSet& samples,
+                                const std::vector<ReflectedMesh>& meshes, bool noise_free) {
+  const size_t count = samples.samples.size();
+  auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
+  std::vector<RGBd> residual(count, RGBd::Constant(-1.0));  // e^2 / 2.25; -1: a neighbour is missing
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    if (noise_free) return;
+    const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
+    const auto [i, j] = pixel_of(k);
+    RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        if (di == 0 && dj == 0) continue;
+        const int64_t m = mesh.sample_at(i + di, j + dj);
+        if (m < 0) return;
+        (di == 0 || dj == 0 ? edges : corners) += data.observed[m].cast<double>();
+      }
+    residual[k] = (data.observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25;
+  });
+  RGBd mean = RGBd::Zero();
+  for (const RGB& o : data.observed) mean += o.cast<double>();
+  const RGBd offset = (0.01 * mean / double(count)).max(1e-12);
+  std::vector<RGBd> local(count), floor(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
+    const auto [i, j] = pixel_of(k);
+    RGBd level = RGBd::Zero();
+    int neighbours = 0;
+    mesh.for_each_neighbour(samples.samples[k].film, [&](uint32_t m) {
+      level += data.observed[m].cast<double>();
+      ++neighbours;
+    });
+    level = neighbours > 0 ? RGBd(level / neighbours) : data.observed[k].cast<double>();
+    RGBd sum = RGBd::Zero();
+    size_t values = 0;
+    for (int reach = kNoiseReach; !noise_free && values < kNoiseValues && reach <= 4 * kNoiseReach; reach *= 2) {
+      sum = RGBd::Zero(), values = 0;
+      for (int dj = -reach; dj <= reach; ++dj)
+        for (int di = -reach; di <= reach; ++di)
+          if (std::max(std::abs(di), std::abs(dj)) > 1)
+            if (const int64_t m = mesh.sample_at(i + di, j + dj); m >= 0 && residual[m][0] >= 0.0) sum += residual[m], ++values;
+    }
+    floor[k] = (kNoiseFloor * (level.abs() + offset)).square();
+    local[k] = values > 0 ? RGBd(sum / double(values)) : RGBd::Zero();
+  });
+  std::vector<RGB> variance(count);
+  for (size_t k = 0; k < count; ++k) variance[k] = (noise_free ? floor[k] : RGBd(local[k].max(floor[k]))).cast<float>();
+  return variance;
+}
+
+}  // namespace
+
 CrossViewSystem::~CrossViewSystem() = default;
 
-CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples)
+CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free)
     : data_(data), n_(int(data.cc.rows())) {
   if (!samples.pixels) throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
   const int views = int(samples.per_frame.size());
@@ -180,24 +264,7 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
   if (pairs_.empty())
     throw Error("no direction is reflected towards two views: material and lighting cannot be separated; the joint "
                 "fit needs views from several directions");
-  // The noise model: a pixel's noise is proportional to its level (measured on glaze's
-  // path-traced captures: 5% of the value at 256 spp, in smooth and in detailed parts
-  // alike), taken from its four neighbours so that a sample's own noise does not set
-  // its weight, with a floor of 1% of the mean observation.
-  RGBd mean = RGBd::Zero();
-  for (const RGB& o : data.observed) mean += o.cast<double>();
-  const RGBd floor = (0.01 * mean / double(count)).max(1e-12);
-  variance_.resize(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    RGBd level = RGBd::Zero();
-    int neighbours = 0;
-    meshes_[samples.samples[k].frame].for_each_neighbour(samples.samples[k].film, [&](uint32_t j) {
-      level += data.observed[j].cast<double>();
-      ++neighbours;
-    });
-    level = neighbours > 0 ? RGBd(level / neighbours) : data.observed[k].cast<double>();
-    variance_[k] = (level.abs() + floor).square().cast<float>();
-  });
+  variance_ = estimate_noise(data, samples, meshes_, noise_free);
 }
 
 void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
@@ -326,13 +393,14 @@ std::vector<double> CrossViewSystem::normalised_residuals(double R0, const Eigen
 
 // Cauchy's loss at 2.385 robust standard deviations (95% efficiency for Gaussian noise).
 constexpr double kCauchy = 2.385;
-// The robust scale's floor, in units of the noise model (about the pixel's level): 0.1%.
-// Noise-free captures leave residuals of a few 1e-5 (the pixel grids' interpolation
-// error), and a scale that small makes the Cauchy weights swing by orders of magnitude
-// between neighbouring R0: the misfit turns rough at the 1e-4 level and the search stops
-// in a spurious minimum (measured: R0 off by 2.6e-4, Rd by 0.0026 on three 512x512
-// views; with the floor 1e-6 and 1.5e-4). Real noise (5% at 256 spp) is far above it.
-constexpr double kMinimumScale = 1e-3;
+// The robust scale's floor, in units of the noise model: 0.1% of the pixel's level (the
+// model's own floor is kNoiseFloor of it). Noise-free captures leave residuals of a few
+// 1e-5 of the level (the pixel grids' interpolation error), and a scale that small makes
+// the Cauchy weights swing by orders of magnitude between neighbouring R0: the misfit
+// turns rough at the 1e-4 level and the search stops in a spurious minimum (measured: R0
+// off by 2.6e-4, Rd by 0.0026 on three 512x512 views; with the floor 1e-6 and 1.5e-4
+// of the level). Real noise (1-9% of the level at 256 spp) is far above it.
+constexpr double kMinimumScale = 1e-3 / kNoiseFloor;
 
 CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
   Fit result;

@@ -51,8 +51,14 @@ class CrossViewSystem {
  public:
   // Pairs every sample with each other view that reflects its direction; `samples` must be
   // pixel samples (the pixel grid is the interpolation mesh). Throws glaze::Error when no
-  // two views see a common direction.
-  CrossViewSystem(const LightingData& data, const SampleSet& samples);
+  // two views see a common direction. The pairs' noise model is estimated from the
+  // captures' pixel-to-pixel residuals (cross_view.cpp), or for `noise_free` captures a
+  // fixed fraction of each pixel's level.
+  CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free);
+
+  // The noise model's floor, relative to a sample's level, and noise-free captures' whole
+  // model: residuals that small are the pixel grids' interpolation error, not noise.
+  static constexpr double kNoiseFloor = 0.005;
   ~CrossViewSystem();
 
   // The robust misfit at R0 (Cauchy loss of the pair residuals, each divided by its
@@ -64,7 +70,7 @@ class CrossViewSystem {
   Fit fit(double R0) const;
 
   // Sets the robust scale from the residuals' median absolute deviation at R0 (first the
-  // least-squares fit's, then the robust fit's; at least 0.1% of the noise model). Before it:
+  // least-squares fit's, then the robust fit's; at least 0.1% of the pixel's level). Before it:
   // least squares.
   void calibrate(double R0);
 

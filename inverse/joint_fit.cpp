@@ -86,7 +86,8 @@ constexpr double kPassTolerance = 1e-3;
 constexpr int kMaxPasses = 4;
 
 // The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
-CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options) {
+CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
+                           const JointFitOptions& joint) {
   const size_t count = data.observed.size();
   if (count < size_t(sh_count(data.lmax)) + 4)
     throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
@@ -98,7 +99,7 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
     throw Error("only " + std::to_string(int(100 * several_views)) +
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
-  return CrossViewSystem(data, samples);
+  return CrossViewSystem(data, samples, joint.noise_free);
 }
 
 // One joint fit of `data` on `cross` (built on the same data object); the searches for R0
@@ -234,7 +235,7 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
 
 JointFit fit_joint(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
                    const JointFitOptions& joint, const FitObserver& observer) {
-  CrossViewSystem cross = pair_views(data, samples, options);
+  CrossViewSystem cross = pair_views(data, samples, options, joint);
   return joint_pass(data, cross, options, joint, kR0Tolerance, observer);
 }
 
@@ -251,7 +252,7 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
   // The views' pairing depends on the samples' geometry only, and its noise model on the
   // captured observations (not on what the later passes take off them): all passes share
   // it. It reads `data`, whose observations the later passes replace in place.
-  CrossViewSystem cross = pair_views(data, samples, options);
+  CrossViewSystem cross = pair_views(data, samples, options, joint);
   JointFit fit = joint_pass(data, cross, options, first_options, 10 * kR0Tolerance, observer);
   fit.passes = 1;
   std::string report;

@@ -216,6 +216,7 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   options.solve_width = 128, options.solve_height = 64;
   JointFitOptions joint;
   joint.band_limited_diffuse = band_limited;
+  joint.noise_free = band_limited;  // the other: the data-driven noise model, as for photographs
   const int footprint = captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
