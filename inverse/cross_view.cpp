@@ -133,7 +133,6 @@ class ReflectedMesh {
 
 namespace {
 
-constexpr double kNoiseFloor = CrossViewSystem::kNoiseFloor;
 // The window whose residuals estimate a sample's noise: (2 kNoiseReach + 1)^2 pixels less
 // the 3 x 3 around the sample, widened (doubled) while it holds fewer than kNoiseValues.
 constexpr int kNoiseReach = 4;
@@ -147,8 +146,8 @@ constexpr size_t kNoiseValues = 8;
 // variance v it has variance (1 + 4/4 + 4/16) v = 2.25 v. The mean of e^2 / 2.25 over the
 // window around the sample is its noise variance; the window leaves out the sample and
 // its 8 neighbours, whose residuals contain the sample's own noise, so that a sample's
-// noise does not set its weight. With a floor of kNoiseFloor times the level (the four
-// neighbours' mean, plus 1% of the mean observation).
+// noise does not set its weight. With a floor of kNoiseFloor (cross_view.h) times the
+// level (the four neighbours' mean, plus 1% of the mean observation).
 //
 // Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
 // is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp
@@ -168,8 +167,7 @@ std::vector<RGB> estimate_noise(const LightingData& data, const SampleSet& sampl
   const size_t count = samples.samples.size();
   auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
   std::vector<RGBd> residual(count, RGBd::Constant(-1.0));  // e^2 / 2.25; -1: a neighbour is missing
-  tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    if (noise_free) return;
+  if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
     const auto [i, j] = pixel_of(k);
     RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
@@ -185,7 +183,7 @@ std::vector<RGB> estimate_noise(const LightingData& data, const SampleSet& sampl
   RGBd mean = RGBd::Zero();
   for (const RGB& o : data.observed) mean += o.cast<double>();
   const RGBd offset = (0.01 * mean / double(count)).max(1e-12);
-  std::vector<RGBd> local(count), floor(count);
+  std::vector<RGB> variance(count);
   tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
     const auto [i, j] = pixel_of(k);
@@ -205,11 +203,9 @@ std::vector<RGB> estimate_noise(const LightingData& data, const SampleSet& sampl
           if (std::max(std::abs(di), std::abs(dj)) > 1)
             if (const int64_t m = mesh.sample_at(i + di, j + dj); m >= 0 && residual[m][0] >= 0.0) sum += residual[m], ++values;
     }
-    floor[k] = (kNoiseFloor * (level.abs() + offset)).square();
-    local[k] = values > 0 ? RGBd(sum / double(values)) : RGBd::Zero();
+    const RGBd floor = (CrossViewSystem::kNoiseFloor * (level.abs() + offset)).square();
+    variance[k] = (values > 0 ? RGBd(sum / double(values)).max(floor) : floor).cast<float>();
   });
-  std::vector<RGB> variance(count);
-  for (size_t k = 0; k < count; ++k) variance[k] = (noise_free ? floor[k] : RGBd(local[k].max(floor[k]))).cast<float>();
   return variance;
 }
 
@@ -400,7 +396,7 @@ constexpr double kCauchy = 2.385;
 // turns rough at the 1e-4 level and the search stops in a spurious minimum (measured: R0
 // off by 2.6e-4, Rd by 0.0026 on three 512x512 views; with the floor 1e-6 and 1.5e-4
 // of the level). Real noise (1-9% of the level at 256 spp) is far above it.
-constexpr double kMinimumScale = 1e-3 / kNoiseFloor;
+constexpr double kMinimumScale = 1e-3 / CrossViewSystem::kNoiseFloor;
 
 CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
   Fit result;
