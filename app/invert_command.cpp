@@ -22,8 +22,8 @@ namespace glaze {
 int command_invert_fit(const std::vector<std::string>& raw) {
   const Arguments args(raw, {"mode", "out", "points", "min-cos", "loss", "loss-scale", "lmax", "texture-res", "env",
                              "env-scale", "env-rotation", "holdout", "holdout-dir", "seed", "max-iterations", "pixel-footprint", "R0",
-                             "Rd", "env-res", "ridge", "solve-res", "diffuse-lmax", "frames", "screenshot", "exposure", "tone-map",
-                             "threads"},
+                             "Rd", "env-res", "ridge", "solve-res", "diffuse-lmax", "max-passes", "frames", "screenshot",
+                             "exposure", "tone-map", "threads"},
                        {"preview"});
   if (args.positionals().size() != 1 || !args.has("out") || !args.has("mode"))
     throw Error("usage: glaze invert-fit DIR/transforms.json --mode material|texture|lighting|joint --out DIR (see `glaze help`)");

@@ -90,6 +90,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     };
   if (joint) {
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
+    joint_options.max_passes = static_cast<int>(args.integer("max-passes", joint_options.max_passes, 1, 100));
     joint_options.band_limited_diffuse = band_limited;
     joint_options.noise_free = noise_free_captures(in.captures);
     joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
@@ -125,6 +126,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["iterations"] = joint_fit->iterations;
     result["evaluations"] = joint_fit->evaluations;
     result["converged"] = joint_fit->converged;
+    result["passes_settled"] = joint_fit->passes_settled;
+    result["last_pass_R0_step"] = joint_fit->pass_step;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
   } else {
@@ -199,7 +202,12 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     warn("the recovered lighting reproduces the input views only to " + std::to_string(std::lround(100 * worst_view)) +
          "% relative RMSE (residual_view_*.exr shows where): the lighting has detail the captures do not resolve (a small, "
          "bright source?), so L_lm may be off by several percent; use more pixels on the object, or more views");
-  if (joint && !joint_fit->converged)
+  if (joint && !joint_fit->passes_settled)
+    warn("the joint fit's passes stopped at " + std::to_string(joint_fit->passes) + " with the last still moving R0 by " +
+         std::to_string(joint_fit->pass_step) + " (solver.txt lists them): the diffuse bands above lmax, predicted from "
+         "each pass's lighting, and the fit are not yet consistent, so R0 may be off by about that much and Rd and the "
+         "scale by several times as much; raise --max-passes");
+  else if (joint && !joint_fit->converged)
     warn("the joint fit stopped after " + std::to_string(joint_fit->iterations) +
          " rounds with R0 still moving (solver.txt lists them): R0 and Rd are the last round's; raise --max-iterations "
          "or add views");

@@ -77,13 +77,12 @@ double minimise_on(Function&& f, const std::vector<double>& grid, double toleran
 // The searches for R0 stop at 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
 constexpr double kR0Tolerance = 1e-4;
 // Full-band captures: passes go on while one moves R0 by kPassTolerance or more, up to
-// kMaxPasses. Two passes are usually consistent (the second moves R0 from the first by
-// under 1e-3 in 13 of 16 measured cases: path-traced and noise-free full-band captures
-// of both spheres under the four lightings), but where the first pass is far off its
-// bands are too (noise-free full-band captures of the white sphere in the blue room: R0
-// 0.061, 0.041, 0.039, 0.0389 against 0.0385 over four passes).
+// JointFitOptions::max_passes. Two passes are usually consistent (the second moves R0
+// from the first by under 1e-3 in 13 of 16 measured cases: path-traced and noise-free
+// full-band captures of both spheres under the four lightings), but where the first pass
+// is far off its bands are too (noise-free full-band captures of the white sphere in the
+// blue room: R0 0.061, 0.041, 0.039, 0.0389 against 0.0385 over four passes).
 constexpr double kPassTolerance = 1e-3;
-constexpr int kMaxPasses = 4;
 
 // The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
 CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
@@ -100,6 +99,18 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
   return CrossViewSystem(data, samples, joint.noise_free);
+}
+
+std::string rd_method(const JointFitOptions& joint) {
+  return joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
+                                    : "the map-consistent lighting solve (full-band diffuse)";
+}
+
+// One line on what the solver did: rounds and evaluations (summed over the passes).
+std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, const JointFitOptions& joint) {
+  return "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) + " evaluations over " +
+         std::to_string(cross.pair_count()) + " view pairs, " + (fit.converged ? "converged" : "NOT converged") +
+         "; Rd from " + rd_method(joint);
 }
 
 // One joint fit of `data` on `cross` (built on the same data object); the searches for R0
@@ -219,11 +230,8 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
     }
   }
 
-  const std::string method = joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
-                                                        : "the map-consistent lighting solve (full-band diffuse)";
-  fit.brief_report = "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) +
-                     " evaluations over " + std::to_string(cross.pair_count()) + " view pairs, " +
-                     (fit.converged ? "converged" : "NOT converged") + "; Rd from " + method;
+  const std::string method = rd_method(joint);
+  fit.brief_report = brief_report(fit, cross, joint);
   fit.full_report = "Joint fit (inverse/joint_fit.h)\n" + std::to_string(cross.pair_count()) +
                     " sample pairs between views; R0 from their robust misfit, searched on [" +
                     std::to_string(r0_bounds.lower) + ", " + std::to_string(r0_bounds.upper) + "]:\n" + rounds +
@@ -241,7 +249,8 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 
 JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax,
                              const LightingFitOptions& options, JointFitOptions joint, const FitObserver& observer) {
-  if (joint.band_limited_diffuse || diffuse_lmax <= data.lmax) return fit_joint(data, samples, options, joint, observer);
+  if (joint.band_limited_diffuse || diffuse_lmax <= data.lmax || joint.max_passes <= 1)
+    return fit_joint(data, samples, options, joint, observer);
   // The first pass only predicts the bands, for which round 1's R0 is close enough (a
   // round 2 typically moves it by under 1e-4; round 0 alone, plain least squares on a
   // quarter of the pairs, is not: measured Rd +0.012 instead of +0.002 on the noise-free
@@ -271,11 +280,20 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
                   "lighting:\n", last.passes, last.R0, last.Rd[0], last.Rd[1], last.Rd[2], fit.passes, data.lmax + 1,
                   diffuse_lmax);
     report += last.full_report + line;
-    if (std::abs(fit.R0 - last.R0) < kPassTolerance || fit.passes == kMaxPasses) break;
+    fit.pass_step = std::abs(double(fit.R0) - double(last.R0));
+    if (fit.pass_step < kPassTolerance || fit.passes >= joint.max_passes) break;
   }
-  fit.brief_report += "; diffuse bands " + std::to_string(data.lmax + 1) + "-" + std::to_string(diffuse_lmax) +
-                      " from the last pass's lighting (" + std::to_string(fit.passes) + " passes)";
-  fit.full_report = report + fit.full_report;
+  // Not settled: the bands taken off and the fit are not yet consistent with each other,
+  // and R0 may be off by about the last step.
+  const bool settled = fit.pass_step < kPassTolerance;
+  fit.passes_settled = settled;
+  fit.converged = fit.converged && settled;
+  char passes[160];
+  std::snprintf(passes, sizeof passes, "; diffuse bands %d-%d from the last pass's lighting (%d passes, %s R0 by %.5f)",
+                data.lmax + 1, diffuse_lmax, fit.passes, settled ? "the last moved" : "NOT settled: the last moved",
+                fit.pass_step);
+  fit.brief_report = brief_report(fit, cross, joint) + passes;
+  fit.full_report = report + fit.full_report + "All passes: " + fit.brief_report + "\n";
   return fit;
 }
 

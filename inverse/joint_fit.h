@@ -29,7 +29,7 @@
 // from the lighting the first fit recovers at its material (predict_diffuse_bands in
 // lighting_fit.h says why that lighting is good enough), takes them off the
 // observations and fits again from the first R0; and again from each new fit's lighting
-// while a pass still moves R0 by 1e-3 or more (at most four passes). (Measured on
+// while a pass still moves R0 by 1e-3 or more (at most max_passes). (Measured on
 // noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
 // white sphere in the blue room, fitted at lmax 4: R0 +0.022 and Rd +0.23 in one pass,
 // +0.0028 and +0.028 after the second, +0.0004 and +0.0056 after the fourth.)
@@ -50,14 +50,19 @@ struct JointFit {
   LightingFit lighting;  // at the recovered material
   int iterations = 0;    // rounds of step 1 (robust scale, then the search for R0)
   int evaluations = 0;   // of the robust misfit
-  bool converged = false;
+  bool converged = false;  // the last pass's rounds, and the passes (below), settled
   int passes = 1;  // of the fit (fit_joint_full_band: each predicts the bands for the next)
+  double pass_step = 0.0;  // how far the last pass moved R0 from the one before (0: one pass)
+  bool passes_settled = true;  // pass_step under 1e-3 (else the passes stopped at max_passes)
   double rms = 0.0;  // of the map-consistent model over samples and channels
   std::string brief_report, full_report;
 };
 
 struct JointFitOptions {
   int max_rounds = 20;
+  // Full-band captures: the most passes (fit_joint_full_band) before the fit stops with
+  // R0 still moving (converged false).
+  int max_passes = 4;
   // The captures' diffuse term is band-limited at the fit's lmax (see above).
   bool band_limited_diffuse = false;
   // The captures carry no noise (glaze's sh integrator is deterministic): the views'

@@ -356,15 +356,30 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
 // passes R0 +0.0028, Rd +0.028 +0.029 +0.020, scale 0.960 (which fails every bound below);
 // four (the passes R0 0.061, 0.041, 0.039, 0.0389) +0.0004, +0.0056 +0.0042 +0.0028, 0.992.
 // Asserted: R0 and the scale at the noise-free bounds, Rd at the path-traced one (the
-// map-consistent solve's texels, README).
+// map-consistent solve's texels, README). Stopped at two passes (--max-passes 2), the fit
+// says that its passes had not settled: the second moved R0 by about 0.02.
 TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
   TemporaryDirectory dir;
   const std::string folder =
       captures(dir, "white_sphere_blue_room.gltf", "full_band_ss4",
                "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
+  const CommandResult run =
+      glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/stopped --mode joint --max-passes 2", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("raise --max-passes"), std::string::npos) << run.err;
+  const nlohmann::json stopped = read_json(folder + "/stopped/fit.json");
+  EXPECT_EQ(stopped["passes"].get<int>(), 2);
+  EXPECT_FALSE(stopped["passes_settled"].get<bool>());
+  EXPECT_FALSE(stopped["converged"].get<bool>());
+  EXPECT_GT(stopped["last_pass_R0_step"].get<double>(), 0.01);
+  EXPECT_NE(stopped["solver"].get<std::string>().find("NOT settled"), std::string::npos) << stopped["solver"];
+
   const nlohmann::json result = fit(dir, folder, "--mode joint");
   const nlohmann::json& truth = result["reference_material"];
   EXPECT_GE(result["passes"].get<int>(), 3);
+  EXPECT_TRUE(result["passes_settled"].get<bool>());
+  EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
+  EXPECT_LT(result["last_pass_R0_step"].get<double>(), 1e-3);
   EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.01) << "channel " << c;
