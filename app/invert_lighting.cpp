@@ -126,7 +126,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["iterations"] = joint_fit->iterations;
     result["evaluations"] = joint_fit->evaluations;
     result["converged"] = joint_fit->converged;
-    result["passes_settled"] = joint_fit->passes_settled;
+    result["passes_settled"] = joint_fit->passes_settled();
     result["last_pass_R0_step"] = joint_fit->pass_step;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
@@ -202,7 +202,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     warn("the recovered lighting reproduces the input views only to " + std::to_string(std::lround(100 * worst_view)) +
          "% relative RMSE (residual_view_*.exr shows where): the lighting has detail the captures do not resolve (a small, "
          "bright source?), so L_lm may be off by several percent; use more pixels on the object, or more views");
-  if (joint && !joint_fit->passes_settled)
+  if (joint && !joint_fit->passes_settled())
     warn("the joint fit's passes stopped at " + std::to_string(joint_fit->passes) + " with the last still moving R0 by " +
          std::to_string(joint_fit->pass_step) + " (solver.txt lists them): the diffuse bands above lmax, predicted from "
          "each pass's lighting, and the fit are not yet consistent, so R0 may be off by about that much and Rd and the "

@@ -76,13 +76,12 @@ double minimise_on(Function&& f, const std::vector<double>& grid, double toleran
 
 // The searches for R0 stop at 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
 constexpr double kR0Tolerance = 1e-4;
-// Full-band captures: passes go on while one moves R0 by kPassTolerance or more, up to
-// JointFitOptions::max_passes. Two passes are usually consistent (the second moves R0
+// Full-band captures: passes go on while one moves R0 by kJointPassTolerance or more, up
+// to JointFitOptions::max_passes. Two passes are usually consistent (the second moves R0
 // from the first by under 1e-3 in 13 of 16 measured cases: path-traced and noise-free
 // full-band captures of both spheres under the four lightings), but where the first pass
 // is far off its bands are too (noise-free full-band captures of the white sphere in the
 // blue room: R0 0.061, 0.041, 0.039, 0.0389 against 0.0385 over four passes).
-constexpr double kPassTolerance = 1e-3;
 
 // The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
 CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, const LightingFitOptions& options,
@@ -267,7 +266,7 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
   std::string report;
   // Each pass takes off the captured observations the bands that the last one's lighting
   // and material predict, and fits again from its R0, until R0 moves by under
-  // kPassTolerance: the bands and the fit are then consistent with each other.
+  // kJointPassTolerance: the bands and the fit are then consistent with each other.
   for (;;) {
     const JointFit last = std::move(fit);
     take_off_diffuse_bands(data, samples, predict_diffuse_bands(last.lighting.map, diffuse_lmax, last.R0, last.Rd));
@@ -281,12 +280,11 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
                   diffuse_lmax);
     report += last.full_report + line;
     fit.pass_step = std::abs(double(fit.R0) - double(last.R0));
-    if (fit.pass_step < kPassTolerance || fit.passes >= joint.max_passes) break;
+    if (fit.passes_settled() || fit.passes >= joint.max_passes) break;
   }
   // Not settled: the bands taken off and the fit are not yet consistent with each other,
   // and R0 may be off by about the last step.
-  const bool settled = fit.pass_step < kPassTolerance;
-  fit.passes_settled = settled;
+  const bool settled = fit.passes_settled();
   fit.converged = fit.converged && settled;
   char passes[160];
   std::snprintf(passes, sizeof passes, "; diffuse bands %d-%d from the last pass's lighting (%d passes, %s R0 by %.5f)",

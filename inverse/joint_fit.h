@@ -44,6 +44,10 @@
 
 namespace glaze {
 
+// Full-band captures: the passes have settled when the last one moved R0 by under this
+// (joint_fit.cpp says why two passes usually are enough).
+inline constexpr double kJointPassTolerance = 1e-3;
+
 struct JointFit {
   float R0 = 0.0f;
   RGB Rd = RGB::Zero();
@@ -53,7 +57,8 @@ struct JointFit {
   bool converged = false;  // the last pass's rounds, and the passes (below), settled
   int passes = 1;  // of the fit (fit_joint_full_band: each predicts the bands for the next)
   double pass_step = 0.0;  // how far the last pass moved R0 from the one before (0: one pass)
-  bool passes_settled = true;  // pass_step under 1e-3 (else the passes stopped at max_passes)
+  // Else the passes stopped at max_passes with R0 still moving.
+  bool passes_settled() const { return pass_step < kJointPassTolerance; }
   double rms = 0.0;  // of the map-consistent model over samples and channels
   std::string brief_report, full_report;
 };
