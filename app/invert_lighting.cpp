@@ -128,6 +128,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["converged"] = joint_fit->converged;
     result["passes_settled"] = joint_fit->passes_settled();
     result["last_pass_R0_step"] = joint_fit->pass_step;
+    result["last_pass_Rd_step"] = joint_fit->pass_Rd_step;
     result["rms"] = joint_fit->rms;
     result["solver"] = joint_fit->brief_report;
   } else {
@@ -204,9 +205,10 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
          "bright source?), so L_lm may be off by several percent; use more pixels on the object, or more views");
   if (joint && !joint_fit->passes_settled())
     warn("the joint fit's passes stopped at " + std::to_string(joint_fit->passes) + " with the last still moving R0 by " +
-         std::to_string(joint_fit->pass_step) + " (solver.txt lists them): the diffuse bands above lmax, predicted from "
-         "each pass's lighting, and the fit are not yet consistent, so R0 may be off by about that much and Rd and the "
-         "scale by several times as much; raise --max-passes");
+         std::to_string(joint_fit->pass_step) + " and Rd by " + std::to_string(joint_fit->pass_Rd_step) +
+         " (solver.txt lists them): the diffuse bands above lmax, predicted from each pass's lighting and material, and "
+         "the fit are not yet consistent, so R0 and Rd may be off by about that much (Rd by several times R0's step) and "
+         "the scale with Rd; raise --max-passes");
   else if (joint && !joint_fit->converged)
     warn("the joint fit stopped after " + std::to_string(joint_fit->iterations) +
          " rounds with R0 still moving (solver.txt lists them): R0 and Rd are the last round's; raise --max-iterations "

@@ -107,12 +107,13 @@ options of `invert-fit`:
                       --diffuse-lmax N (default 16; 0: off): for captures whose diffuse
                       term has every band (photographs, the path tracer), a second pass
                       with the bands lmax+1..N predicted from the first pass's lighting
-                      (joint: more, each from the last, while R0 moves by 1e-3; at most
-                      --max-passes) (N <= lmax: off; sh captures: at most their own lmax)
+                      (joint: more, each from the last, while R0 or Rd moves by 1e-3;
+                      at most --max-passes) (N <= lmax: off; sh captures: at most their
+                      own lmax)
   --mode joint:       as lighting, without the material; --solve-res default 128x64,
                       --max-iterations N (rounds of each pass, default 20),
-                      --max-passes N (default 4; 1: one pass): passes that end with R0
-                      still moving are reported (fit.json passes_settled) and warned
+                      --max-passes N (default 8; 1: one pass): passes that end with R0
+                      or Rd still moving are reported (fit.json passes_settled) and warned
   --threads N         worker threads (default: all cores; the results do not depend on it)
   --preview           a window: each view observed, predicted and |residual| x8,
                       updated as the solver iterates (--frames N --screenshot F.png,

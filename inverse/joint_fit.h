@@ -29,7 +29,8 @@
 // from the lighting the first fit recovers at its material (predict_diffuse_bands in
 // lighting_fit.h says why that lighting is good enough), takes them off the
 // observations and fits again from the first R0; and again from each new fit's lighting
-// while a pass still moves R0 by 1e-3 or more (at most max_passes). (Measured on
+// while a pass still moves R0 or Rd by 1e-3 or more (at most max_passes); once R0 has
+// settled, a pass keeps it and solves Rd and the lighting alone. (Measured on
 // noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
 // white sphere in the blue room, fitted at lmax 4: R0 +0.022 and Rd +0.23 in one pass,
 // +0.0028 and +0.028 after the second, +0.0004 and +0.0056 after the fourth.)
@@ -47,6 +48,8 @@ namespace glaze {
 // Full-band captures: the passes have settled when the last one moved R0 by under this
 // (joint_fit.cpp says why two passes usually are enough).
 inline constexpr double kJointPassTolerance = 1e-3;
+// ... and the last moved Rd by under this in every channel.
+inline constexpr double kJointPassRdTolerance = 1e-3;
 
 struct JointFit {
   float R0 = 0.0f;
@@ -57,8 +60,9 @@ struct JointFit {
   bool converged = false;  // the last pass's rounds, and the passes (below), settled
   int passes = 1;  // of the fit (fit_joint_full_band: each predicts the bands for the next)
   double pass_step = 0.0;  // how far the last pass moved R0 from the one before (0: one pass)
-  // Else the passes stopped at max_passes with R0 still moving.
-  bool passes_settled() const { return pass_step < kJointPassTolerance; }
+  double pass_Rd_step = 0.0;  // and Rd, in its channel that moved most
+  // Else the passes stopped at max_passes with R0 or Rd still moving.
+  bool passes_settled() const { return pass_step < kJointPassTolerance && pass_Rd_step < kJointPassRdTolerance; }
   double rms = 0.0;  // of the map-consistent model over samples and channels
   std::string brief_report, full_report;
 };
@@ -66,8 +70,8 @@ struct JointFit {
 struct JointFitOptions {
   int max_rounds = 20;
   // Full-band captures: the most passes (fit_joint_full_band) before the fit stops with
-  // R0 still moving (converged false).
-  int max_passes = 4;
+  // R0 or Rd still moving (converged false).
+  int max_passes = 8;
   // The captures' diffuse term is band-limited at the fit's lmax (see above).
   bool band_limited_diffuse = false;
   // The captures carry no noise (glaze's sh integrator is deterministic): the views'

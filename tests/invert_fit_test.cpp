@@ -321,15 +321,15 @@ TEST(InvertFit, ResultsDoNotDependOnThreads) {
 
 // Full-band diffuse term (what photographs and the path tracer have): noise-free captures
 // of the sh integrator at lmax 16, fitted at lmax 4, where the bands 5-16 are not in the
-// model. The second pass predicts them from the first pass's lighting (joint_fit.h).
+// model. The later passes predict them from the pass before's lighting (joint_fit.h).
 // Measured (R0; Rd; scale): white sphere in the blue room, one pass (--diffuse-lmax 0)
-// +0.0000; -0.021 -0.011 -0.003; 1.030, two passes +0.0000; +0.0007 +0.0006 +0.0003;
-// 0.999; red sphere in the office, two passes +0.0000; -0.0035 (red) -0.0000 +0.0000.
-// R0 and the scale meet the noise-free bounds (0.001, 3%); Rd is asserted within 0.005,
-// short of the noise-free 0.003 (the predicted bands come from a recovered map, not the
-// true one) and within the path-traced 0.01; a second pass that did nothing would fail
-// it (one pass: 0.021).
-TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
+// +0.0000; -0.021 -0.011 -0.003; 1.030, settled after three passes -0.0000; +0.0007
+// +0.0001 +0.0000 (two: +0.0007 +0.0006 +0.0003); red sphere in the office, settled
+// after four -0.0000; -0.0022 -0.0004 +0.0000 (two: -0.0035 in red). R0 and the scale meet the
+// noise-free bounds (0.001, 3%); Rd is asserted within 0.005, short of the noise-free
+// 0.003 (the predicted bands come from a recovered map, not the true one) and within
+// the path-traced 0.01; passes that did nothing would fail it (one pass: 0.021).
+TEST(InvertFitJoint, FullBandDiffuseIsModelledByLaterPasses) {
   TemporaryDirectory dir;
   for (const char* scene : {"white_sphere_blue_room.gltf", "red_sphere_office.gltf"}) {
     SCOPED_TRACE(scene);
@@ -337,7 +337,8 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
     const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
     const nlohmann::json& truth = result["reference_material"];
     EXPECT_FALSE(result["band_limited_diffuse"].get<bool>());
-    EXPECT_EQ(result["passes"].get<int>(), 2);
+    EXPECT_GE(result["passes"].get<int>(), 2);
+    EXPECT_TRUE(result["passes_settled"].get<bool>());
     EXPECT_EQ(result["diffuse_lmax"].get<int>(), 16);
     EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
     EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
@@ -349,12 +350,44 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByASecondPass) {
   }
 }
 
+// A joint fit of `folder`'s full-band captures stopped at two passes (--max-passes 2),
+// which must say that its passes had not settled.
+nlohmann::json fit_stopped_at_two_passes(const TemporaryDirectory& dir, const std::string& folder) {
+  const CommandResult run =
+      glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/stopped --mode joint --max-passes 2", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("raise --max-passes"), std::string::npos) << run.err;
+  const nlohmann::json stopped = read_json(folder + "/stopped/fit.json");
+  EXPECT_EQ(stopped["passes"].get<int>(), 2);
+  EXPECT_FALSE(stopped["passes_settled"].get<bool>());
+  EXPECT_FALSE(stopped["converged"].get<bool>());
+  EXPECT_NE(stopped["solver"].get<std::string>().find("NOT settled"), std::string::npos) << stopped["solver"];
+  return stopped;
+}
+
+// A joint fit whose passes settled: R0 and the scale at the noise-free bounds (0.001, 3%),
+// Rd within `Rd_tolerance`.
+void expect_settled_joint_fit(const nlohmann::json& result, double Rd_tolerance) {
+  const nlohmann::json& truth = result["reference_material"];
+  EXPECT_GE(result["passes"].get<int>(), 3);
+  EXPECT_TRUE(result["passes_settled"].get<bool>());
+  EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
+  EXPECT_LT(result["last_pass_R0_step"].get<double>(), 1e-3);
+  EXPECT_LT(result["last_pass_Rd_step"].get<double>(), 1e-3);
+  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_tolerance) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
+  }
+}
+
 // Passes go on while one moves R0 by 1e-3 or more (joint_fit.h). Three views (the
 // scene's other two held out) with pixels of 4 x 4 rays, modelled as such, at 256 x 256:
 // the first pass of the white sphere in the blue room is far off (R0 0.061 against
 // 0.0385), and so are the bands it predicts. Measured: two
 // passes R0 +0.0028, Rd +0.028 +0.029 +0.020, scale 0.960 (which fails every bound below);
-// four (the passes R0 0.061, 0.041, 0.039, 0.0389) +0.0004, +0.0056 +0.0042 +0.0028, 0.992.
+// four (the passes R0 0.061, 0.041, 0.039, 0.0389) +0.0004, +0.0056 +0.0042 +0.0028, 0.992,
+// and a fifth at that R0 for Rd (below) +0.0057 +0.0043 +0.0028, 0.991.
 // Asserted: R0 and the scale at the noise-free bounds, Rd at the path-traced one (the
 // map-consistent solve's texels, README). Stopped at two passes (--max-passes 2), the fit
 // says that its passes had not settled: the second moved R0 by about 0.02.
@@ -363,28 +396,28 @@ TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
   const std::string folder =
       captures(dir, "white_sphere_blue_room.gltf", "full_band_ss4",
                "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
-  const CommandResult run =
-      glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/stopped --mode joint --max-passes 2", dir);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_NE(run.err.find("raise --max-passes"), std::string::npos) << run.err;
-  const nlohmann::json stopped = read_json(folder + "/stopped/fit.json");
-  EXPECT_EQ(stopped["passes"].get<int>(), 2);
-  EXPECT_FALSE(stopped["passes_settled"].get<bool>());
-  EXPECT_FALSE(stopped["converged"].get<bool>());
-  EXPECT_GT(stopped["last_pass_R0_step"].get<double>(), 0.01);
-  EXPECT_NE(stopped["solver"].get<std::string>().find("NOT settled"), std::string::npos) << stopped["solver"];
+  EXPECT_GT(fit_stopped_at_two_passes(dir, folder)["last_pass_R0_step"].get<double>(), 0.01);
+  expect_settled_joint_fit(fit(dir, folder, "--mode joint"), 0.01);
+}
 
-  const nlohmann::json result = fit(dir, folder, "--mode joint");
-  const nlohmann::json& truth = result["reference_material"];
-  EXPECT_GE(result["passes"].get<int>(), 3);
-  EXPECT_TRUE(result["passes_settled"].get<bool>());
-  EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
-  EXPECT_LT(result["last_pass_R0_step"].get<double>(), 1e-3);
-  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.01) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-  }
+// Once R0 has settled, passes go on while one moves Rd by 1e-3 or more, keeping R0
+// (joint_fit.h): the bands are predicted from the pass before's Rd, so each pass takes
+// back about nine tenths of Rd's error. Red sphere in the blue room, noise-free full-band
+// captures (sh at lmax 16, pixels of 4 x 4 rays, three views at 256 x 256). Measured (red
+// channel's Rd): -0.070 after the first pass, -0.0071 after the second (which moved R0
+// by 0.0002), then -0.0013 and -0.0005 in two passes at that R0. Asserted: the noise-free
+// bounds (0.001, 0.003, 3%), which two passes miss in Rd; stopped there (--max-passes 2)
+// the fit says that its passes had not settled, although R0 had.
+TEST(InvertFitJoint, PassesGoOnUntilRdSettles) {
+  TemporaryDirectory dir;
+  const std::string folder =
+      captures(dir, "red_sphere_blue_room.gltf", "full_band_ss4",
+               "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
+  const nlohmann::json stopped = fit_stopped_at_two_passes(dir, folder);
+  EXPECT_LT(stopped["last_pass_R0_step"].get<double>(), 1e-3);
+  EXPECT_GT(stopped["last_pass_Rd_step"].get<double>(), 0.01);
+  EXPECT_GT(std::abs(stopped["Rd"][0].get<double>() - stopped["reference_material"]["Rd"][0].get<double>()), 0.003);
+  expect_settled_joint_fit(fit(dir, folder, "--mode joint"), 0.003);
 }
 
 // Path-traced captures: the views' pairs are weighted by a noise model estimated from the
@@ -419,7 +452,8 @@ TEST(InvertFitLighting, FullBandDiffuseIsModelledByASecondFit) {
     const std::string folder = captures(dir, scene, "full_band", "--integrator sh --ss 1 --lmax 16 --res 256x256");
     const nlohmann::json result = fit(dir, folder, "--mode lighting --pixel-footprint 1");
     EXPECT_FALSE(result["band_limited_diffuse"].get<bool>());
-    EXPECT_EQ(result["passes"].get<int>(), 2);
+    EXPECT_GE(result["passes"].get<int>(), 2);
+    EXPECT_TRUE(result["passes_settled"].get<bool>());
     EXPECT_EQ(result["diffuse_lmax"].get<int>(), 16);
     EXPECT_LT(result["reference_L_lm_error_l2"].get<double>(), bound);
     EXPECT_LT(result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(), 0.03);
