@@ -297,8 +297,9 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
   fit.passes = 1;
   std::string report;
   // Each pass takes off the captured observations the bands that the last one's lighting
-  // and material predict, and fits again from its R0, until R0 moves by under
-  // kJointPassTolerance: the bands and the fit are then consistent with each other.
+  // and material predict, and fits again from its R0, until a pass moves R0 by under
+  // kJointPassTolerance and Rd by under kJointPassRdTolerance: the bands and the fit are
+  // then consistent with each other.
   for (;;) {
     const JointFit last = std::move(fit);
     take_off_diffuse_bands(data, samples, predict_diffuse_bands(last.lighting.map, diffuse_lmax, last.R0, last.Rd));
@@ -306,7 +307,8 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     // Rd (the mirror fixes the lighting's detail whatever Rd is, so the bands' diffuse
     // radiance goes with Rd) and each pass takes back about nine tenths of the error of
     // the one before (measured on the red sphere in the blue room: Rd -0.070, -0.0071,
-    // -0.0013, -0.0005 over four passes).
+    // -0.0013, -0.0005 over four passes). The first pass has no step to judge by (and
+    // searched R0 coarsely), so the second always searches again.
     if (last.passes > 1 && last.pass_step < kJointPassTolerance) {
       fit = rd_pass(data, options, last);
     } else {

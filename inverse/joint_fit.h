@@ -46,7 +46,7 @@
 namespace glaze {
 
 // Full-band captures: the passes have settled when the last one moved R0 by under this
-// (joint_fit.cpp says why two passes usually are enough).
+// (joint_fit.cpp says why two passes usually are enough for R0) ...
 inline constexpr double kJointPassTolerance = 1e-3;
 // ... and the last moved Rd by under this in every channel.
 inline constexpr double kJointPassRdTolerance = 1e-3;

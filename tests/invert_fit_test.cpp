@@ -389,7 +389,7 @@ void expect_settled_joint_fit(const nlohmann::json& result, double Rd_tolerance)
 // four (the passes R0 0.061, 0.041, 0.039, 0.0389) +0.0004, +0.0056 +0.0042 +0.0028, 0.992,
 // and a fifth at that R0 for Rd (below) +0.0057 +0.0043 +0.0028, 0.991.
 // Asserted: R0 and the scale at the noise-free bounds, Rd at the path-traced one (the
-// map-consistent solve's texels, README). Stopped at two passes (--max-passes 2), the fit
+// map-consistent solve's texels and the bands predicted from a recovered map, README). Stopped at two passes (--max-passes 2), the fit
 // says that its passes had not settled: the second moved R0 by about 0.02.
 TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
   TemporaryDirectory dir;
