@@ -390,6 +390,56 @@ MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, i
   return solution;
 }
 
+namespace {
+
+// A texel's mirror estimate needs its samples' mirror weight to add up to at least one
+// sample at F = 0.01: below that the mirror carries under 1% of what they saw, and
+// (o - diffuse) / F is the diffuse model's residual amplified a hundredfold or more (a
+// matte coat, R0 near 0, seen near the normal), not the lighting.
+constexpr double kMinMirrorWeight = 1e-4;
+// Lat-long texels shrink towards the poles (by sin theta) while the samples' density on
+// the sphere of directions does not, so there many texels fall between samples although
+// the directions all around them are seen: the SH reconstruction in those, as for
+// directions no view sees, speckled the poles with lmax-4 ringing of the bright lights
+// nearby (office, noise-free captures: the top rows 2-5 times too bright, the map's bands
+// 2-5 off by 5-9%, and through the diffuse bands it predicts, the joint fit's Rd). Such a
+// texel takes the samples within kBetweenSamples of its centre instead, the disc widened
+// a texel's height at a time; only directions with no sample that near are unseen.
+constexpr double kBetweenSamples = 3.0 * kPiD / 180.0;
+
+// Texel (i, j)'s mirror estimate: its samples' F^2-weighted mean, else that of the samples
+// in the smallest disc (of radius a whole number of texel heights up to kBetweenSamples,
+// at least one) whose weight suffices; none when no disc's does.
+std::optional<RGBd> mirror_estimate_near(const std::vector<RGBd>& sum, const std::vector<double>& weight, int width,
+                                         int height, int i, int j) {
+  const size_t texel = size_t(j) * width + i;
+  if (weight[texel] >= kMinMirrorWeight) return RGBd(sum[texel] / weight[texel]);
+  const double row_angle = kPiD / height, column_angle = 2.0 * kPiD / width;
+  const int reach = std::max(1, int(kBetweenSamples / row_angle + 1e-9));
+  const double theta = (j + 0.5) * row_angle;
+  for (int rows = 1; rows <= reach; ++rows) {
+    const double radius = rows * row_angle;
+    RGBd disc_sum = RGBd::Zero();
+    double disc_weight = 0.0;
+    for (int y = std::max(0, j - rows); y <= std::min(height - 1, j + rows); ++y) {
+      // Texel centres within `radius`: cos(d) = cos(theta - theta') - sin(theta) sin(theta')
+      // (1 - cos(dphi)) >= cos(radius) bounds the longitude difference dphi.
+      const double other = (y + 0.5) * row_angle;
+      const double room =
+          std::max(0.0, (std::cos(theta - other) - std::cos(radius)) / (std::sin(theta) * std::sin(other)));
+      const int columns = room >= 2.0 ? width / 2 : std::min(width / 2, int(std::acos(1.0 - room) / column_angle + 1e-9));
+      for (int dx = -columns; dx <= std::min(columns, width - 1 - columns); ++dx) {
+        const size_t near = size_t(y) * width + size_t((i + dx + width) % width);
+        disc_sum += sum[near], disc_weight += weight[near];
+      }
+    }
+    if (disc_weight >= kMinMirrorWeight) return RGBd(disc_sum / disc_weight);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 void check_lighting_options(const LightingFitOptions& options) {
   if (options.width < 1 || options.height < 1 || options.width > 4096 || options.height > 2048 ||
       options.solve_width > 4096 || options.solve_height > 2048)
@@ -470,25 +520,19 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   for (int c = 0; c < 3; ++c) fit.channel_mirror_share[c] = all_light[c] > 0.0 ? mirror_light[c] / all_light[c] : 0.0;
   fit.map = Image(width, height);
   fit.covered.assign(size_t(width) * height, 0.0f);
-  size_t covered = 0;
-  for (int j = 0; j < height; ++j)
+  tbb::parallel_for(0, height, [&](int j) {  // each texel writes only its own value
     for (int i = 0; i < width; ++i) {
       const size_t texel = size_t(j) * width + i;
-      // A texel is covered when its samples' mirror weight adds up to at least one sample
-      // at F = 0.01: below that the mirror carries under 1% of what they saw, and
-      // (o - diffuse) / F is the diffuse model's residual amplified a hundredfold or
-      // more (a matte coat, R0 near 0, seen near the normal), not the lighting.
-      constexpr double kMinMirrorWeight = 1e-4;
-      if (weight[texel] >= kMinMirrorWeight) {
-        fit.map.set(i, j, (sum[texel] / weight[texel]).cast<float>().max(0.0));
+      if (const std::optional<RGBd> seen = mirror_estimate_near(sum, weight, width, height, i, j)) {
+        fit.map.set(i, j, seen->cast<float>().max(0.0));
         fit.covered[texel] = 1.0f;
-        ++covered;
       } else {
         const Vec3 direction = latlong_to_direction(Vec2((i + 0.5f) / width, (j + 0.5f) / height));
         fit.map.set(i, j, fit.coefficients.eval(direction).max(0.0f));
       }
     }
-  fit.covered_fraction = double(covered) / (double(width) * height);
+  });
+  fit.covered_fraction = std::count(fit.covered.begin(), fit.covered.end(), 1.0f) / (double(width) * height);
   return fit;
 }
 
