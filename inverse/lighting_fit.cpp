@@ -403,40 +403,92 @@ constexpr double kMinMirrorWeight = 1e-4;
 // directions no view sees, speckled the poles with lmax-4 ringing of the bright lights
 // nearby (office, noise-free captures: the top rows 2-5 times too bright, the map's bands
 // 2-5 off by 5-9%, and through the diffuse bands it predicts, the joint fit's Rd). Such a
-// texel takes the samples within kBetweenSamples of its centre instead, the disc widened
-// a texel's height at a time; only directions with no sample that near are unseen.
+// texel takes the samples within kBetweenSamples of its centre instead, in the smallest
+// disc (doubled from a texel's height) that holds enough; only directions with no sample
+// that near are unseen.
 constexpr double kBetweenSamples = 3.0 * kPiD / 180.0;
 
-// Texel (i, j)'s mirror estimate: its samples' F^2-weighted mean, else that of the samples
-// in the smallest disc (of radius a whole number of texel heights up to kBetweenSamples,
-// at least one) whose weight suffices; none when no disc's does.
-std::optional<RGBd> mirror_estimate_near(const std::vector<RGBd>& sum, const std::vector<double>& weight, int width,
-                                         int height, int i, int j) {
-  const size_t texel = size_t(j) * width + i;
-  if (weight[texel] >= kMinMirrorWeight) return RGBd(sum[texel] / weight[texel]);
-  const double row_angle = kPiD / height, column_angle = 2.0 * kPiD / width;
-  const int reach = std::max(1, int(kBetweenSamples / row_angle + 1e-9));
-  const double theta = (j + 0.5) * row_angle;
-  for (int rows = 1; rows <= reach; ++rows) {
-    const double radius = rows * row_angle;
-    RGBd disc_sum = RGBd::Zero();
-    double disc_weight = 0.0;
-    for (int y = std::max(0, j - rows); y <= std::min(height - 1, j + rows); ++y) {
-      // Texel centres within `radius`: cos(d) = cos(theta - theta') - sin(theta) sin(theta')
-      // (1 - cos(dphi)) >= cos(radius) bounds the longitude difference dphi.
-      const double other = (y + 0.5) * row_angle;
-      const double room =
-          std::max(0.0, (std::cos(theta - other) - std::cos(radius)) / (std::sin(theta) * std::sin(other)));
-      const int columns = room >= 2.0 ? width / 2 : std::min(width / 2, int(std::acos(1.0 - room) / column_angle + 1e-9));
-      for (int dx = -columns; dx <= std::min(columns, width - 1 - columns); ++dx) {
-        const size_t near = size_t(y) * width + size_t((i + dx + width) % width);
-        disc_sum += sum[near], disc_weight += weight[near];
+// The splat's sums per texel, kept as prefix sums along each row, so that the sum over
+// any run of a row's texels costs two lookups whatever the map's resolution.
+class SplatRows {
+ public:
+  SplatRows(const std::vector<RGBd>& sum, const std::vector<double>& weight, int width, int height)
+      : width_(width), height_(height), sum_(size_t(width + 1) * height, RGBd::Zero()), weight_(sum_.size(), 0.0) {
+    tbb::parallel_for(0, height, [&](int j) {
+      const size_t row = size_t(j) * (width + 1), texel = size_t(j) * width;
+      for (int i = 0; i < width; ++i) {
+        sum_[row + i + 1] = sum_[row + i] + sum[texel + i];
+        weight_[row + i + 1] = weight_[row + i] + weight[texel + i];
       }
-    }
-    if (disc_weight >= kMinMirrorWeight) return RGBd(disc_sum / disc_weight);
+    });
   }
-  return std::nullopt;
-}
+
+  // The discs around row j's texels that estimate_near tries: radius 1, 2, 4, ... texel
+  // heights, up to kBetweenSamples (at least one); per disc, its rows and in each the
+  // texels on either side of the centre's column that it holds. The same for every
+  // texel of the row.
+  struct Run {
+    int row, columns;
+  };
+  std::vector<std::vector<Run>> discs(int j) const {
+    const double row_angle = kPiD / height_, column_angle = 2.0 * kPiD / width_;
+    const int reach = std::max(1, int(kBetweenSamples / row_angle + 1e-9));
+    const double theta = (j + 0.5) * row_angle;
+    std::vector<std::vector<Run>> all;
+    for (int rows = 1;; rows = std::min(2 * rows, reach)) {
+      const double radius = rows * row_angle;
+      std::vector<Run>& disc = all.emplace_back();
+      for (int y = std::max(0, j - rows); y <= std::min(height_ - 1, j + rows); ++y) {
+        // Texel centres within `radius`: cos(d) = cos(theta - theta') - sin(theta)
+        // sin(theta') (1 - cos(dphi)) >= cos(radius) bounds the longitude difference dphi.
+        const double other = (y + 0.5) * row_angle;
+        const double room =
+            std::max(0.0, (std::cos(theta - other) - std::cos(radius)) / (std::sin(theta) * std::sin(other)));
+        disc.push_back({y, room >= 2.0 ? width_ : int(std::acos(1.0 - room) / column_angle + 1e-9)});
+      }
+      if (rows == reach) return all;
+    }
+  }
+
+  // Texel (i, j)'s mirror estimate: its samples' F^2-weighted mean, else that of the
+  // samples in the smallest of `discs` (discs(j)) whose weight suffices; none when no
+  // disc's does.
+  std::optional<RGBd> estimate_near(int i, int j, const std::vector<std::vector<Run>>& discs) const {
+    RGBd s = RGBd::Zero();
+    double w = 0.0;
+    add_run(j, i, 1, s, w);
+    if (w >= kMinMirrorWeight) return RGBd(s / w);
+    for (const std::vector<Run>& disc : discs) {
+      s = RGBd::Zero(), w = 0.0;
+      for (const Run& run : disc) add_run(run.row, i - run.columns, std::min(2 * run.columns + 1, width_), s, w);
+      if (w >= kMinMirrorWeight) return RGBd(s / w);
+    }
+    return std::nullopt;
+  }
+
+ private:
+  // Adds the sums over `count` (<= width) texels of row y from column `first` on,
+  // wrapping around.
+  void add_run(int y, int first, int count, RGBd& s, double& w) const {
+    first = ((first % width_) + width_) % width_;
+    const size_t row = size_t(y) * (width_ + 1);
+    const int end = first + count;
+    auto add = [&](int from, int to) {
+      s += sum_[row + to] - sum_[row + from];
+      w += weight_[row + to] - weight_[row + from];
+    };
+    if (end <= width_) {
+      add(first, end);
+    } else {
+      add(first, width_);
+      add(0, end - width_);
+    }
+  }
+
+  int width_, height_;
+  std::vector<RGBd> sum_;       // per row, width + 1 prefix sums
+  std::vector<double> weight_;  // the same for the weights
+};
 
 }  // namespace
 
@@ -520,10 +572,12 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   for (int c = 0; c < 3; ++c) fit.channel_mirror_share[c] = all_light[c] > 0.0 ? mirror_light[c] / all_light[c] : 0.0;
   fit.map = Image(width, height);
   fit.covered.assign(size_t(width) * height, 0.0f);
+  const SplatRows splat(sum, weight, width, height);
   tbb::parallel_for(0, height, [&](int j) {  // each texel writes only its own value
+    const auto discs = splat.discs(j);
     for (int i = 0; i < width; ++i) {
       const size_t texel = size_t(j) * width + i;
-      if (const std::optional<RGBd> seen = mirror_estimate_near(sum, weight, width, height, i, j)) {
+      if (const std::optional<RGBd> seen = splat.estimate_near(i, j, discs)) {
         fit.map.set(i, j, seen->cast<float>().max(0.0));
         fit.covered[texel] = 1.0f;
       } else {
