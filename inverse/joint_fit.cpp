@@ -81,7 +81,7 @@ constexpr double kR0Tolerance = 1e-4;
 // from the first by under 1e-3 in 13 of 16 measured cases: path-traced and noise-free
 // full-band captures of both spheres under the four lightings), but where the first pass
 // is far off its bands are too (noise-free full-band captures of the white sphere in the
-// blue room: R0 0.061, 0.041, 0.039, 0.0389 against 0.0385 over four passes). Rd
+// blue room: R0 0.061, 0.041, 0.0387, 0.03845 against 0.0385 over four passes). Rd
 // settles more slowly (fit_joint_full_band says why): the later passes keep R0 and go on
 // while one moves Rd by kJointPassRdTolerance or more.
 
@@ -306,8 +306,8 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     // R0 settles first; Rd then still moves, as the bands are predicted from the last
     // Rd (the mirror fixes the lighting's detail whatever Rd is, so the bands' diffuse
     // radiance goes with Rd) and each pass takes back about nine tenths of the error of
-    // the one before (measured on the red sphere in the blue room: Rd -0.070, -0.0071,
-    // -0.0013, -0.0005 over four passes). The first pass has no step to judge by (and
+    // the one before (measured on the red sphere in the blue room: Rd -0.070, -0.0050,
+    // then +0.0007 and +0.0011, at the fit's own error, over four passes). The first pass has no step to judge by (and
     // searched R0 coarsely), so the second always searches again.
     if (last.passes > 1 && last.pass_step < kJointPassTolerance) {
       fit = rd_pass(data, options, last);
