@@ -307,8 +307,9 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     // Rd (the mirror fixes the lighting's detail whatever Rd is, so the bands' diffuse
     // radiance goes with Rd) and each pass takes back about nine tenths of the error of
     // the one before (measured on the red sphere in the blue room: Rd -0.070, -0.0050,
-    // then +0.0007 and +0.0011, at the fit's own error, over four passes). The first pass has no step to judge by (and
-    // searched R0 coarsely), so the second always searches again.
+    // then +0.0007 and +0.0011, at the fit's own error, over four passes). The first
+    // pass has no step to judge by (and searched R0 coarsely), so the second always
+    // searches again.
     if (last.passes > 1 && last.pass_step < kJointPassTolerance) {
       fit = rd_pass(data, options, last);
     } else {
