@@ -54,11 +54,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   LightingFitOptions options;
   std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
   options.ridge = args.real("ridge", float(options.ridge));
-  // The joint fit separates material from lighting by the variation within a texel of
-  // the solved map, so it takes a finer one (128x64 at 512x512 captures: still dozens of
-  // samples per texel); lighting alone is steadier on the coarser default.
-  const std::pair<int, int> solve_default = joint ? std::pair(128, 64) : std::pair(options.solve_width, options.solve_height);
-  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", solve_default);
+  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", {options.solve_width, options.solve_height});
 
   auto stage = Clock::now();
   // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact for

@@ -110,7 +110,8 @@ options of `invert-fit`:
                       (joint: more, each from the last, while R0 or Rd moves by 1e-3;
                       at most --max-passes) (N <= lmax: off; sh captures: at most their
                       own lmax)
-  --mode joint:       as lighting, without the material; --solve-res default 128x64,
+  --mode joint:       as lighting, without the material (full-band captures: Rd from
+                      the solve map turned by 0, 1/4, 1/2, 3/4 of a texel in azimuth),
                       --max-iterations N (rounds of each pass, default 20),
                       --max-passes N (default 8; 1: one pass): passes that end with R0
                       or Rd still moving are reported (fit.json passes_settled) and warned

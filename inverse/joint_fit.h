@@ -33,8 +33,8 @@
 // settled, a pass keeps it and solves Rd and the lighting alone. (Measured on
 // noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
 // white sphere in the blue room, fitted at lmax 4: R0 +0.022 and Rd +0.23 in one pass,
-// +0.0021 and +0.022 after the second, +0.0002 and +0.0032 after the third, -0.0000
-// and +0.0008 after the fourth.)
+// +0.0019 and +0.021 after the second, +0.0001 and +0.0032 after the third, -0.0001
+// and +0.0011 after the fourth.)
 #pragma once
 
 #include "inverse/fit_progress.h"

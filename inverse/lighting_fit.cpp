@@ -210,11 +210,14 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
   return L;
 }
 
-MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge)
+MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge, double turn)
     : n_(sh_count(data.lmax)), ridge_(ridge) {
-  // Texel and in-texel offset (in texels, each in [-1/2, 1/2)) of a reflected direction.
+  // Texel and in-texel offset (in texels, each in [-1/2, 1/2)) of a reflected direction,
+  // on the grid turned by `turn` texels in azimuth.
   auto locate = [&](const Vec3& direction, Eigen::Vector3d& phi) {
-    const Vec2 uv = direction_to_latlong(direction);
+    Vec2 uv = direction_to_latlong(direction);
+    uv.x() -= float(turn / width);
+    if (uv.x() < 0.0f) uv.x() += 1.0f;
     const int t = texel_of(uv, width, height);
     phi = Eigen::Vector3d(1.0, uv.x() * width - (t % width + 0.5), uv.y() * height - (t / width + 0.5));
     return t;
@@ -271,7 +274,7 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   for (int t = 0; t < width * height; ++t) {
     const int j = t / width;
     const double solid_angle = latlong_texel_solid_angle(j, width, height);
-    sh_eval<float>(data.lmax, latlong_to_direction(Vec2((t % width + 0.5f) / width, (j + 0.5f) / height)), basis);
+    sh_eval<float>(data.lmax, latlong_to_direction(Vec2(float((t % width + 0.5 + turn) / width), (j + 0.5f) / height)), basis);
     const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXf>(basis.data(), n_).cast<double>();
     if (index[t] >= 0) P.col(index[t]) = solid_angle * y;
     else uncovered += solid_angle * y * y.transpose();

@@ -151,9 +151,15 @@ struct LightingFit {
 // Everything material-independent is summed per texel once, so a solve for another
 // (R0, Rd) costs O(texels x 50^2), whatever the number of samples: the joint fit solves
 // it at every step.
+//
+// The texels' edges fall where the lat-long grid puts them, and under sharp bright
+// sources (a window's frame) where they cut the source changes what the value and
+// gradient of a texel can represent: `turn` (0 <= turn < 1) turns the grid by that
+// fraction of a texel in azimuth, so that the joint fit can average over where the edges
+// fall (joint_fit.cpp, TurnedMapSystems).
 class MapConsistentSystem {
  public:
-  MapConsistentSystem(const LightingData& data, int width, int height, double ridge);
+  MapConsistentSystem(const LightingData& data, int width, int height, double ridge, double turn = 0.0);
   struct Solution {
     Eigen::VectorXd map;   // T on the covered texels (the value at each texel's centre)
     Eigen::VectorXd L;     // L_lm

@@ -213,7 +213,6 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   const RayTracer tracer(scene);
   LightingFitOptions options;
-  options.solve_width = 128, options.solve_height = 64;
   JointFitOptions joint;
   joint.band_limited_diffuse = band_limited;
   joint.noise_free = band_limited;  // the other: the data-driven noise model, as for photographs
