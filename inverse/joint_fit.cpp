@@ -102,18 +102,6 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
   return CrossViewSystem(data, samples, joint.noise_free);
 }
 
-std::string rd_method(const JointFitOptions& joint) {
-  return joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
-                                    : "the map-consistent lighting solve (full-band diffuse)";
-}
-
-// One line on what the solver did: rounds and evaluations (summed over the passes).
-std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, const JointFitOptions& joint) {
-  return "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) + " evaluations over " +
-         std::to_string(cross.pair_count()) + " view pairs, " + (fit.converged ? "converged" : "NOT converged") +
-         "; Rd from " + rd_method(joint);
-}
-
 // The map-consistent solve for the full-band captures' Rd, on the grid turned by
 // kGridTurns fractions of a texel in azimuth. Which texel holds which part of a sharp
 // source changes what the texels' values and gradients can represent, and with it the
@@ -129,6 +117,20 @@ std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, cons
 // the unturned grid.
 constexpr int kGridTurns = 4;
 
+std::string rd_method(const JointFitOptions& joint) {
+  return joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
+                                    : "the map-consistent lighting solve at " + std::to_string(kGridTurns) +
+                                      " turns of its grid (full-band diffuse)";
+}
+
+// One line on what the solver did: rounds and evaluations (summed over the passes).
+std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, const JointFitOptions& joint) {
+  return "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) + " evaluations over " +
+         std::to_string(cross.pair_count()) + " view pairs, " + (fit.converged ? "converged" : "NOT converged") +
+         "; Rd from " + rd_method(joint);
+}
+
+// The kGridTurns map-consistent systems (above) of one set of observations.
 class TurnedMapSystems {
  public:
   TurnedMapSystems(const LightingData& data, const LightingFitOptions& options) {
