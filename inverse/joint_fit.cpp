@@ -117,10 +117,11 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
 // the unturned grid.
 constexpr int kGridTurns = 4;
 
+const std::string kTurnedSolve = "the map-consistent lighting solve at " + std::to_string(kGridTurns) + " turns of its grid";
+
 std::string rd_method(const JointFitOptions& joint) {
   return joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
-                                    : "the map-consistent lighting solve at " + std::to_string(kGridTurns) +
-                                      " turns of its grid (full-band diffuse)";
+                                    : kTurnedSolve + " (full-band diffuse)";
 }
 
 // One line on what the solver did: rounds and evaluations (summed over the passes).
@@ -300,7 +301,7 @@ JointFit rd_pass(const LightingData& data, const LightingFitOptions& options, co
   fit.Rd = systems.Rd(last.R0);
   solve_lighting(fit, data, options, systems.unturned());
   fit.converged = last.converged;
-  fit.full_report = "R0 kept; Rd from the map-consistent lighting solve\n";
+  fit.full_report = "R0 kept; Rd from " + kTurnedSolve + "\n";
   return fit;
 }
 

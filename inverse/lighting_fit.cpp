@@ -213,13 +213,16 @@ Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, 
 MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, int height, double ridge, double turn)
     : n_(sh_count(data.lmax)), ridge_(ridge) {
   // Texel and in-texel offset (in texels, each in [-1/2, 1/2)) of a reflected direction,
-  // on the grid turned by `turn` texels in azimuth.
+  // on the grid turned by `turn` texels in azimuth. The azimuth is wrapped in texels and
+  // in double, where a direction just short of the turned grid's seam stays in its last
+  // column (in float, u - turn / width + 1 can round onto 1).
   auto locate = [&](const Vec3& direction, Eigen::Vector3d& phi) {
-    Vec2 uv = direction_to_latlong(direction);
-    uv.x() -= float(turn / width);
-    if (uv.x() < 0.0f) uv.x() += 1.0f;
-    const int t = texel_of(uv, width, height);
-    phi = Eigen::Vector3d(1.0, uv.x() * width - (t % width + 0.5), uv.y() * height - (t / width + 0.5));
+    const Vec2 uv = direction_to_latlong(direction);
+    double x = double(uv.x()) * width - turn;
+    if (x < 0.0) x += width;
+    const int column = std::min(int(x), width - 1);
+    const int t = texel_of(uv, width, height) / width * width + column;
+    phi = Eigen::Vector3d(1.0, x - (column + 0.5), uv.y() * height - (t / width + 0.5));
     return t;
   };
   const size_t count = data.observed.size();
