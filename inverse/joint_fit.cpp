@@ -131,18 +131,22 @@ std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, cons
          "; Rd from " + rd_method(joint);
 }
 
-// The kGridTurns map-consistent systems (above) of one set of observations.
+// The map-consistent systems (above) of one set of observations: the kGridTurns turns
+// where Rd is solved on them, the unturned grid alone (`turned` false) where only the
+// lighting is.
 class TurnedMapSystems {
  public:
-  TurnedMapSystems(const LightingData& data, const LightingFitOptions& options) {
-    for (int turn = 0; turn < kGridTurns; ++turn)
+  TurnedMapSystems(const LightingData& data, const LightingFitOptions& options, bool turned) {
+    const int turns = turned ? kGridTurns : 1;
+    for (int turn = 0; turn < turns; ++turn)
       systems_.emplace_back(data, options.solve_width, options.solve_height, options.ridge, double(turn) / kGridTurns);
   }
   const MapConsistentSystem& unturned() const { return systems_.front(); }
 
   // Step 2 for full-band captures (joint_fit.h): Rd per channel at R0, where the summed
-  // misfit is least (a grid over Rd's bounds, then Brent's method).
+  // misfit is least (a grid over Rd's bounds, then Brent's method). Needs `turned`.
   RGB Rd(double R0) const {
+    if (systems_.size() != size_t(kGridTurns)) throw Error("internal: Rd asked of the unturned solve grid alone");
     const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
     std::vector<MapConsistentSystem::Profile> profiles;
     for (const MapConsistentSystem& system : systems_) profiles.push_back(system.profile(R0));
@@ -199,7 +203,8 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
     if (cost < best.fit.cost) best.R0 = R0, best.fit = std::move(at);
     return cost;
   };
-  const TurnedMapSystems systems(data, options);
+  // Band-limited captures take Rd from the views' mirror estimates, not the turned grids.
+  const TurnedMapSystems systems(data, options, !joint.band_limited_diffuse);
   // Step 2 at R0: Rd per channel (see joint_fit.h); `lighting` receives the views' own
   // lighting when that is what Rd came from.
   auto diffuse_reflectance = [&](double R0, const Eigen::MatrixXd& d, Eigen::MatrixXd* lighting) {
@@ -295,7 +300,7 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
 // the views' misfit costs most of a pass, and searched again it returned R0 unchanged to
 // 1e-5 (red sphere in the blue room, path-traced, passes 3-5).
 JointFit rd_pass(const LightingData& data, const LightingFitOptions& options, const JointFit& last) {
-  const TurnedMapSystems systems(data, options);
+  const TurnedMapSystems systems(data, options, true);
   JointFit fit;
   fit.R0 = last.R0;
   fit.Rd = systems.Rd(last.R0);
