@@ -237,26 +237,34 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
       else if (minus >= 0) steps[k][axis] = data.reflected[k] - data.reflected[minus];
     }
   });
-  // Per sample, its pairs with every other view, gathered in parallel and kept in sample
-  // order.
-  std::vector<std::vector<Pair>> found(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    const int own = samples.samples[k].frame;
-    for (int f = 0; f < views; ++f) {
-      if (f == own) continue;
-      Pair p;
-      p.sample = uint32_t(k);
-      std::array<uint32_t, 3> corners;
-      std::array<float, 3> weights;
-      if (!meshes_[f].locate(data.reflected[k], corners, weights)) continue;
-      p.count = 3;
-      std::copy(corners.begin(), corners.end(), p.near.begin());
-      std::copy(weights.begin(), weights.end(), p.weight.begin());
-      interpolate_quadratically(meshes_[f], samples, steps, p);
-      found[k].push_back(p);
-    }
-  });
-  for (const std::vector<Pair>& list : found) pairs_.insert(pairs_.end(), list.begin(), list.end());
+  // Per sample, its pairs with every other view, found in parallel a block of samples at
+  // a time (which bounds the full-width stencils held at once) and kept in sample order.
+  constexpr size_t kBlock = size_t(1) << 16;
+  for (size_t begin = 0; begin < count; begin += kBlock) {
+    const size_t end = std::min(count, begin + kBlock);
+    std::vector<std::vector<Stencil>> found(end - begin);
+    tbb::parallel_for(begin, end, [&](size_t k) {
+      const int own = samples.samples[k].frame;
+      for (int f = 0; f < views; ++f) {
+        if (f == own) continue;
+        Stencil s;
+        std::array<uint32_t, 3> corners;
+        std::array<float, 3> weights;
+        if (!meshes_[f].locate(data.reflected[k], corners, weights)) continue;
+        s.count = 3;
+        std::copy(corners.begin(), corners.end(), s.member.begin());
+        std::copy(weights.begin(), weights.end(), s.weight.begin());
+        interpolate_quadratically(meshes_[f], samples, steps, uint32_t(k), !noise_free, s);
+        found[k - begin].push_back(s);
+      }
+    });
+    for (size_t k = begin; k < end; ++k)
+      for (const Stencil& s : found[k - begin]) {
+        pairs_.push_back({uint32_t(k), s.count, members_.size()});
+        members_.insert(members_.end(), s.member.begin(), s.member.begin() + s.count);
+        weights_.insert(weights_.end(), s.weight.begin(), s.weight.begin() + s.count);
+      }
+  }
   if (pairs_.empty())
     throw Error("no direction is reflected towards two views: material and lighting cannot be separated; the joint "
                 "fit needs views from several directions");
@@ -264,21 +272,30 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
 }
 
 void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
-                                                const std::vector<std::array<Vec3, 2>>& steps, Pair& p) const {
-  // The 3 x 3 pixels around the corner nearest r.
-  const int nearest = int(std::max_element(p.weight.begin(), p.weight.begin() + 3) - p.weight.begin());
-  const Vec2& film = samples.samples[p.near[nearest]].film;
-  std::array<uint32_t, kStencil> members;
+                                                const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample,
+                                                bool average_noise, Stencil& s) const {
+  // The pixels around the corner nearest r: 5 x 5 where the captures have noise and the
+  // other view sees r nearer its normal than the sample does (F smaller there, whatever
+  // R0 is: the header says why), else 3 x 3; each needs all its pixels but at most one
+  // (six unknowns, and some to spare against a degenerate layout at the object's edge),
+  // and 5 x 5 falls back to 3 x 3 where it has fewer.
+  const int nearest = int(std::max_element(s.weight.begin(), s.weight.begin() + 3) - s.weight.begin());
+  const Vec2& film = samples.samples[s.member[nearest]].film;
+  std::array<uint32_t, kWidestStencil> members;
   int n = 0;
-  for (int dj = -1; dj <= 1; ++dj)
-    for (int di = -1; di <= 1; ++di)
-      if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
-  if (n < 8) return;  // six unknowns, and some to spare against a degenerate layout
+  for (int reach = average_noise && data_.mu[s.member[nearest]] > data_.mu[sample] ? 2 : 1;; --reach) {
+    n = 0;
+    for (int dj = -reach; dj <= reach; ++dj)
+      for (int di = -reach; di <= reach; ++di)
+        if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
+    if (n >= (2 * reach + 1) * (2 * reach + 1) - 1) break;
+    if (reach == 1) return;
+  }
   // Coordinates on the plane tangent at r (the central projection, as the triangles'
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
   // cells (footprint.h) has a footprint of (K^2 - 1) / (12 K^2) pixels^2 per film axis;
   // J maps the film's axes to the plane.
-  const Frame plane = Frame::from_normal(data_.reflected[p.sample].normalized());
+  const Frame plane = Frame::from_normal(data_.reflected[sample].normalized());
   const Eigen::Vector3d r = plane.n.cast<double>(), e1 = plane.s.cast<double>(), e2 = plane.t.cast<double>();
   const double K = data_.footprint, per_axis = (K * K - 1.0) / (12.0 * K * K);
   auto covariance = [&](uint32_t k) {
@@ -300,7 +317,7 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
     const Eigen::Matrix2d S = covariance(members[m]);
     A.row(m) << 1.0, u, v, 0.5 * (u * u + S(0, 0)), u * v + S(0, 1), 0.5 * (v * v + S(1, 1));
   }
-  const Eigen::Matrix2d Sa = covariance(p.sample);
+  const Eigen::Matrix2d Sa = covariance(sample);
   Eigen::Matrix<double, 6, 1> target;
   target << 1.0, 0.0, 0.0, 0.5 * Sa(0, 0), Sa(0, 1), 0.5 * Sa(1, 1);
   // The weights are A (A^T A)^-1 target, the quadratic's value through the records; the
@@ -312,22 +329,30 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
   if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 1e-8 * normal.vectorD().maxCoeff())) return;
   const Eigen::VectorXd weights = scaled * normal.solve(target.cwiseQuotient(norms));
   if (!weights.allFinite()) return;
-  p.count = uint32_t(n);
-  for (int m = 0; m < n; ++m) p.near[m] = members[m], p.weight[m] = float(weights(m));
+  s.count = uint32_t(n);
+  for (int m = 0; m < n; ++m) s.member[m] = members[m], s.weight[m] = float(weights(m));
 }
 
-void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::VectorXd> x, Eigen::Ref<Eigen::Vector3d> y,
-                                 Eigen::Ref<Eigen::Vector3d> weight) const {
+std::vector<double> CrossViewSystem::inverse_fresnel(double R0) const {
+  std::vector<double> inverse(data_.mu.size());
+  tbb::parallel_for(size_t(0), inverse.size(), [&](size_t k) {
+    inverse[k] = 1.0 / std::max(schlick_fresnel(R0, double(data_.mu[k])), 1e-30);
+  });
+  return inverse;
+}
+
+void CrossViewSystem::pair_terms(const Pair& p, const std::vector<double>& inverse_F, Eigen::Ref<Eigen::VectorXd> x,
+                                 Eigen::Ref<Eigen::Vector3d> y, Eigen::Ref<Eigen::Vector3d> weight) const {
   // o_a - c_a.d - F_a sum_j w_j (o_j - c_j.d) / F_j = y - x.d: its noise variance is
   // v_a + sum_j (F_a w_j / F_j)^2 v_j (the lighting eliminated between two independent
   // observations), and its weight the inverse of that.
-  const double Fa = schlick_fresnel(R0, double(data_.mu[p.sample]));
+  const double Fa = 1.0 / inverse_F[p.sample];
   x = data_.c_row(p.sample).cast<double>();
   y = data_.observed[p.sample].cast<double>().matrix();
   Eigen::Vector3d variance = variance_[p.sample].cast<double>().matrix();
-  for (uint32_t i = 0; i < p.count; ++i) {
-    const uint32_t j = p.near[i];
-    const double ratio = Fa * p.weight[i] / std::max(schlick_fresnel(R0, double(data_.mu[j])), 1e-30);
+  for (size_t i = p.first; i < p.first + p.count; ++i) {
+    const uint32_t j = members_[i];
+    const double ratio = Fa * weights_[i] * inverse_F[j];
     x -= ratio * data_.c_row(j).cast<double>();
     y -= ratio * data_.observed[j].cast<double>().matrix();
     variance += ratio * ratio * variance_[j].cast<double>().matrix();
@@ -335,7 +360,8 @@ void CrossViewSystem::pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::Vec
   weight = variance.cwiseInverse();
 }
 
-Eigen::MatrixXd CrossViewSystem::solve(double R0, const Eigen::MatrixXd* reweight_at, double c2) const {
+Eigen::MatrixXd CrossViewSystem::solve(const std::vector<double>& inverse_F, const Eigen::MatrixXd* reweight_at,
+                                       double c2) const {
   const size_t used = (pairs_.size() + stride_ - 1) / stride_;
   const size_t chunks = (used + kChunk - 1) / kChunk;
   struct Sums {
@@ -348,7 +374,7 @@ Eigen::MatrixXd CrossViewSystem::solve(double R0, const Eigen::MatrixXd* reweigh
     Eigen::MatrixXd X(n_, rows), Y(rows, 3), W(rows, 3);
     Eigen::Vector3d y, weight;
     for (size_t r = 0; r < rows; ++r) {
-      pair_terms(pairs_[(first + r) * stride_], R0, X.col(r), y, weight);
+      pair_terms(pairs_[(first + r) * stride_], inverse_F, X.col(r), y, weight);
       double robust = 1.0;
       if (reweight_at) robust = 1.0 / (1.0 + (y - reweight_at->transpose() * X.col(r)).cwiseAbs2().dot(weight) / (3.0 * c2));
       W.row(r) = robust * weight.transpose();
@@ -376,12 +402,13 @@ Eigen::MatrixXd CrossViewSystem::solve(double R0, const Eigen::MatrixXd* reweigh
   return d;
 }
 
-std::vector<double> CrossViewSystem::normalised_residuals(double R0, const Eigen::MatrixXd& d) const {
+std::vector<double> CrossViewSystem::normalised_residuals(const std::vector<double>& inverse_F,
+                                                          const Eigen::MatrixXd& d) const {
   std::vector<double> squared((pairs_.size() + stride_ - 1) / stride_);
   tbb::parallel_for(size_t(0), squared.size(), [&](size_t p) {
     Eigen::VectorXd x(n_);
     Eigen::Vector3d y, weight;
-    pair_terms(pairs_[p * stride_], R0, x, y, weight);
+    pair_terms(pairs_[p * stride_], inverse_F, x, y, weight);
     squared[p] = (y - d.transpose() * x).cwiseAbs2().dot(weight) / 3.0;
   });
   return squared;
@@ -400,17 +427,18 @@ constexpr double kMinimumScale = 1e-3 / CrossViewSystem::kNoiseFloor;
 
 CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
   Fit result;
+  const std::vector<double> inverse_F = inverse_fresnel(R0);
   if (!std::isfinite(scale_)) {  // not calibrated yet: plain least squares
-    result.d = solve(R0, nullptr, 0.0);
-    for (double z : normalised_residuals(R0, result.d)) result.cost += z;
+    result.d = solve(inverse_F, nullptr, 0.0);
+    for (double z : normalised_residuals(inverse_F, result.d)) result.cost += z;
     return result;
   }
   const double c2 = kCauchy * kCauchy * scale_ * scale_;
   // Iteratively reweighted: each solve weighs the pairs by the residuals of the last.
   constexpr int kReweightings = 3;
-  result.d = solve(R0, nullptr, c2);
-  for (int iteration = 1; iteration < kReweightings; ++iteration) result.d = solve(R0, &result.d, c2);
-  const std::vector<double> squared = normalised_residuals(R0, result.d);
+  result.d = solve(inverse_F, nullptr, c2);
+  for (int iteration = 1; iteration < kReweightings; ++iteration) result.d = solve(inverse_F, &result.d, c2);
+  const std::vector<double> squared = normalised_residuals(inverse_F, result.d);
   for (double z : squared) result.cost += 0.5 * c2 * std::log1p(z / c2);
   return result;
 }
@@ -418,7 +446,7 @@ CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
 void CrossViewSystem::calibrate(double R0) {
   // The scale from the least-squares residuals, then again from the robust fit's.
   auto median_magnitude = [&](const Eigen::MatrixXd& fitted) {
-    std::vector<double> magnitude = normalised_residuals(R0, fitted);
+    std::vector<double> magnitude = normalised_residuals(inverse_fresnel(R0), fitted);
     for (double& z : magnitude) z = std::sqrt(z);
     std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
     return std::max(1.4826 * magnitude[magnitude.size() / 2], 1e-30);

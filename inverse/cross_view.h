@@ -19,13 +19,32 @@
 // grazing pixel averages the lighting's curvature over a longer patch than a pixel seen
 // near the normal. With L = L0 + g.u + u^T H u / 2 around r, pixel j records
 // L(u_j) + tr(H S_j) / 2 (S_j: its footprint's covariance) and sample a records
-// L0 + tr(H S_a) / 2. The weights w_j over the other view's 3 x 3 pixels nearest r are
+// L0 + tr(H S_a) / 2. The weights w_j over the other view's 3 x 3 pixels nearest r (or
+// 5 x 5, below) are
 // the least-squares quadratic's through their records, evaluated at sample a's own
 // footprint: second-order exact, where linear interpolation on a triangle leaves
 // sum_j w_j u_j^T H u_j / 2 + tr(H (sum_j w_j S_j - S_a)) / 2, an error that changes
 // with n.v as F does and so biases R0 under small bright sources (measured on 256 spp
 // path-traced captures in the office: R0 +0.0012 to +0.0017 with linear weights,
 // +0.0003 to +0.0007 with these).
+//
+// The comparison multiplies the other view's noise by F_a / F_j: up to about 9 where
+// sample a is grazing (F ~ 0.35) and the other view sees r head-on (F = R0). Those are
+// the pairs that fix R0 (the change of F between the two views is largest), and their
+// noise is the other view's, where the mirror is a few percent of a pixel's level. Where
+// the other view sees r nearer its normal than sample a does (F_j < F_a, whatever R0 is)
+// the quadratic goes through its 5 x 5 pixels instead (on captures with noise; noise-free
+// ones keep 3 x 3, as nothing is there to average): 25 records for six unknowns, the
+// same second-order exactness, and the weights' sum of squares (the factor on that
+// view's noise variance) 0.14-0.15 against 0.38-0.56 through 3 x 3. The other pairs keep
+// 3 x 3: their noise is sample a's own. Measured on the white sphere in the blue room,
+// path-traced at 256 spp (the case where R0's noise costs most: Rd's error is about 13
+// times R0's), six seeds: R0 within -0.0019 to +0.0009 (mean +0.0001) against -0.0016
+// to +0.0023 (mean +0.0011) through 3 x 3 everywhere. Through 5 x 5 everywhere the mean
+// is +0.0003 and the spread as wide (-0.0011 to +0.0015); through 7 x 7 where the other
+// view is nearer its normal, -0.0021 to +0.0003. The price is a wider patch for the
+// quadratic: at 160 x 160 the white spheres under the real maps go from R0 -0.0002 and
+// -0.0001 to -0.0019 and -0.0009 (St Fagans, Lebombo), their detail smoothed.
 //
 // Where the lighting has detail finer than the sample spacing (a window's edge, a small
 // lamp) no interpolation is right and the equation does not hold; such pairs are
@@ -90,35 +109,49 @@ class CrossViewSystem {
   size_t pair_count() const { return pairs_.size(); }
 
  private:
-  // The other view's pixels a pair interpolates: its 3 x 3 nearest the direction (the
-  // three corners of the triangle that holds it where fewer than 8 exist, at the edge of
-  // the object).
-  static constexpr int kStencil = 9;
-  struct Pair {
-    uint32_t sample;  // seen by view a
-    uint32_t count;   // of the other view's samples below
-    std::array<uint32_t, kStencil> near;  // the other view's samples around the same direction
-    std::array<float, kStencil> weight;   // their interpolation weights (sum 1)
+  // The other view's samples around a sample's direction and their interpolation weights
+  // (sum 1): its 3 x 3 or 5 x 5 pixels nearest the direction (above), or the three
+  // corners of the triangle that holds it where too few of those exist, at the edge of
+  // the object.
+  static constexpr int kWidestStencil = 25;
+  struct Stencil {
+    uint32_t count = 0;
+    std::array<uint32_t, kWidestStencil> member;
+    std::array<float, kWidestStencil> weight;
   };
-  // Replaces the pair's linear weights on its triangle by the quadratic's on the 3 x 3
-  // pixels around the corner nearest r (see above); leaves the pair as it is where too few
-  // pixels exist or their quadratic is ill-conditioned. `steps`: per sample, the change of
-  // its reflected direction per pixel along the film's x and y.
+  // Sample `sample` of view a and the other view's stencil, stored flat at `first` in
+  // members_ and weights_ (most stencils are 3 x 3: a 5 x 5 slot for each would more
+  // than double the pairs' memory).
+  struct Pair {
+    uint32_t sample;
+    uint32_t count;
+    size_t first;
+  };
+  // Replaces the stencil's linear weights on its triangle by the quadratic's on the 3 x 3
+  // or (`average_noise`, see above) 5 x 5 pixels around the corner nearest r; leaves it as
+  // it is where too few pixels exist or their quadratic is ill-conditioned. `steps`: per
+  // sample, the change of its reflected direction per pixel along the film's x and y.
   void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
-                                 const std::vector<std::array<Vec3, 2>>& steps, Pair& p) const;
-  // The residual's data and diffuse parts of pair p at R0, and its noise weight.
-  void pair_terms(const Pair& p, double R0, Eigen::Ref<Eigen::VectorXd> x, Eigen::Ref<Eigen::Vector3d> y,
-                  Eigen::Ref<Eigen::Vector3d> weight) const;
+                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool average_noise,
+                                 Stencil& s) const;
+  // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
+  std::vector<double> inverse_fresnel(double R0) const;
+  // The residual's data and diffuse parts of pair p at the R0 of `inverse_F`, and its
+  // noise weight.
+  void pair_terms(const Pair& p, const std::vector<double>& inverse_F, Eigen::Ref<Eigen::VectorXd> x,
+                  Eigen::Ref<Eigen::Vector3d> y, Eigen::Ref<Eigen::Vector3d> weight) const;
   // Weighted least squares for d; pair weights: the inverse noise variance, times the
   // Cauchy weight (scale^2 c2) of the pair's residual at `reweight_at` when given.
-  Eigen::MatrixXd solve(double R0, const Eigen::MatrixXd* reweight_at, double c2) const;
+  Eigen::MatrixXd solve(const std::vector<double>& inverse_F, const Eigen::MatrixXd* reweight_at, double c2) const;
   // Per pair, its residual's squared norm in units of its noise.
-  std::vector<double> normalised_residuals(double R0, const Eigen::MatrixXd& d) const;
+  std::vector<double> normalised_residuals(const std::vector<double>& inverse_F, const Eigen::MatrixXd& d) const;
 
   const LightingData& data_;
   int n_;
   std::vector<ReflectedMesh> meshes_;
   std::vector<Pair> pairs_;
+  std::vector<uint32_t> members_;
+  std::vector<float> weights_;
   std::vector<RGB> variance_;    // per sample and channel: the noise model
   double scale_ = INFINITY;      // robust scale of the normalised residuals
   size_t stride_ = 1;

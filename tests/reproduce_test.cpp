@@ -62,20 +62,21 @@ void expect_inverse_bounds(const nlohmann::json& results) {
     if (row["object"] != "textured") {
       EXPECT_LT(row["relative_rmse"].get<double>(), 0.1) << row.dump();
     }
-  // Joint (issue 6 is open for path-traced captures). Measured over capture seeds 0-2
-  // (`reproduce --seed`) at these 160x160, 256-spp captures: R0 within 0.0025 and Rd
-  // within 0.069 (the real maps, the office), the red sphere's red channel in the blue
-  // room -0.095 to -0.097; the white sphere in the blue room fails (R0 -0.025, Rd -0.24
-  // to -0.38, the lighting's scale 2.3-2.5: the path tracer's diffuse bands above lmax
-  // move a misfit that is nearly flat in R0; see the README). Asserted with some margin
-  // over that spread, the failing case only as a guard against getting worse.
+  // Joint (issue 6 is open for path-traced captures: the bounds below are looser than
+  // its 0.003 and 0.01). Measured over capture seeds 0-2 (`reproduce --seed`) at these
+  // 160x160, 256-spp captures, R0 and worst Rd: office red +0.0002, -0.013 to -0.021;
+  // office white +0.0002 to +0.0006, -0.0075 to -0.011; blue-room red -0.0002, -0.0030
+  // to -0.021; blue-room white +0.0001 to +0.0026, +0.0025 to +0.038; seed 0 under St
+  // Fagans red -0.0005, -0.0023, white -0.0019, -0.0062, under Lebombo red -0.0002,
+  // -0.011, white -0.0009, -0.013. The blue-room white sphere is the one R0's noise moves
+  // most (cross_view.h): comparing the views through 3 x 3 pixels only, seeds 0 and 1
+  // gave R0 +0.0073 and +0.0056, Rd +0.097 and +0.069, which fail these bounds (the
+  // white spheres under the real maps then: R0 -0.0002 and -0.0001, Rd -0.0024 and
+  // -0.0072). Asserted with some margin over that spread.
   for (const auto& row : results["table3"]) {
     SCOPED_TRACE(row["lighting"].get<std::string>() + " " + row["object"].get<std::string>());
-    const bool blue_room = row["lighting"] == "blue-room";
-    const bool fails = blue_room && row["object"] == "white";
-    EXPECT_NEAR(row["joint_R0_error"].get<double>(), 0.0, fails ? 0.035 : 0.004);
-    for (int c = 0; c < 3; ++c)
-      EXPECT_NEAR(row["joint_Rd_error"][c].get<double>(), 0.0, fails ? 0.5 : blue_room && c == 0 ? 0.13 : 0.08) << "channel " << c;
+    EXPECT_NEAR(row["joint_R0_error"].get<double>(), 0.0, 0.004);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(row["joint_Rd_error"][c].get<double>(), 0.0, 0.08) << "channel " << c;
   }
 }
 
