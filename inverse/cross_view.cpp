@@ -247,7 +247,7 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
       const int own = samples.samples[k].frame;
       for (int f = 0; f < views; ++f) {
         if (f == own) continue;
-        Stencil s;
+        Stencil s{};
         std::array<uint32_t, 3> corners;
         std::array<float, 3> weights;
         if (!meshes_[f].locate(data.reflected[k], corners, weights)) continue;
@@ -274,23 +274,28 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
 void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample,
                                                 bool average_noise, Stencil& s) const {
-  // The pixels around the corner nearest r: 5 x 5 where the captures have noise and the
+  // Around the corner nearest r: 5 x 5 pixels where the captures have noise and the
   // other view sees r nearer its normal than the sample does (F smaller there, whatever
-  // R0 is: the header says why), else 3 x 3; each needs all its pixels but at most one
-  // (six unknowns, and some to spare against a degenerate layout at the object's edge),
-  // and 5 x 5 falls back to 3 x 3 where it has fewer.
+  // R0 is: the header says why), and where that fails 3 x 3.
   const int nearest = int(std::max_element(s.weight.begin(), s.weight.begin() + 3) - s.weight.begin());
-  const Vec2& film = samples.samples[s.member[nearest]].film;
+  const uint32_t corner = s.member[nearest];
+  if (average_noise && data_.mu[corner] > data_.mu[sample] && quadratic_weights(mesh, samples, steps, sample, corner, 2, s))
+    return;
+  quadratic_weights(mesh, samples, steps, sample, corner, 1, s);
+}
+
+bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
+                                        const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, uint32_t corner,
+                                        int reach, Stencil& s) const {
+  // All the pixels but at most one: six unknowns, and some to spare against a degenerate
+  // layout at the object's edge.
+  const Vec2& film = samples.samples[corner].film;
   std::array<uint32_t, kWidestStencil> members;
   int n = 0;
-  for (int reach = average_noise && data_.mu[s.member[nearest]] > data_.mu[sample] ? 2 : 1;; --reach) {
-    n = 0;
-    for (int dj = -reach; dj <= reach; ++dj)
-      for (int di = -reach; di <= reach; ++di)
-        if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
-    if (n >= (2 * reach + 1) * (2 * reach + 1) - 1) break;
-    if (reach == 1) return;
-  }
+  for (int dj = -reach; dj <= reach; ++dj)
+    for (int di = -reach; di <= reach; ++di)
+      if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
+  if (n < (2 * reach + 1) * (2 * reach + 1) - 1) return false;
   // Coordinates on the plane tangent at r (the central projection, as the triangles'
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
   // cells (footprint.h) has a footprint of (K^2 - 1) / (12 K^2) pixels^2 per film axis;
@@ -312,7 +317,7 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
   for (int m = 0; m < n; ++m) {
     const Eigen::Vector3d q = data_.reflected[members[m]].cast<double>();
     const double along = q.dot(r);
-    if (!(along > 0.5)) return;
+    if (!(along > 0.5)) return false;
     const double u = q.dot(e1) / along, v = q.dot(e2) / along;
     const Eigen::Matrix2d S = covariance(members[m]);
     A.row(m) << 1.0, u, v, 0.5 * (u * u + S(0, 0)), u * v + S(0, 1), 0.5 * (v * v + S(1, 1));
@@ -323,14 +328,16 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
   // The weights are A (A^T A)^-1 target, the quadratic's value through the records; the
   // columns scaled to unit norm so that the conditioning test means something.
   const Eigen::Matrix<double, 6, 1> norms = A.colwise().norm().transpose();
-  if (!(norms.minCoeff() > 0.0)) return;
+  if (!(norms.minCoeff() > 0.0)) return false;
   const Eigen::Matrix<double, Eigen::Dynamic, 6> scaled = A * norms.cwiseInverse().asDiagonal();
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> normal(scaled.transpose() * scaled);
-  if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 1e-8 * normal.vectorD().maxCoeff())) return;
+  if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 1e-8 * normal.vectorD().maxCoeff()))
+    return false;
   const Eigen::VectorXd weights = scaled * normal.solve(target.cwiseQuotient(norms));
-  if (!weights.allFinite()) return;
+  if (!weights.allFinite()) return false;
   s.count = uint32_t(n);
   for (int m = 0; m < n; ++m) s.member[m] = members[m], s.weight[m] = float(weights(m));
+  return true;
 }
 
 std::vector<double> CrossViewSystem::inverse_fresnel(double R0) const {
@@ -445,8 +452,9 @@ CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
 
 void CrossViewSystem::calibrate(double R0) {
   // The scale from the least-squares residuals, then again from the robust fit's.
+  const std::vector<double> inverse_F = inverse_fresnel(R0);
   auto median_magnitude = [&](const Eigen::MatrixXd& fitted) {
-    std::vector<double> magnitude = normalised_residuals(inverse_fresnel(R0), fitted);
+    std::vector<double> magnitude = normalised_residuals(inverse_F, fitted);
     for (double& z : magnitude) z = std::sqrt(z);
     std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
     return std::max(1.4826 * magnitude[magnitude.size() / 2], 1e-30);

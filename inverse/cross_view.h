@@ -20,13 +20,12 @@
 // near the normal. With L = L0 + g.u + u^T H u / 2 around r, pixel j records
 // L(u_j) + tr(H S_j) / 2 (S_j: its footprint's covariance) and sample a records
 // L0 + tr(H S_a) / 2. The weights w_j over the other view's 3 x 3 pixels nearest r (or
-// 5 x 5, below) are
-// the least-squares quadratic's through their records, evaluated at sample a's own
-// footprint: second-order exact, where linear interpolation on a triangle leaves
-// sum_j w_j u_j^T H u_j / 2 + tr(H (sum_j w_j S_j - S_a)) / 2, an error that changes
-// with n.v as F does and so biases R0 under small bright sources (measured on 256 spp
-// path-traced captures in the office: R0 +0.0012 to +0.0017 with linear weights,
-// +0.0003 to +0.0007 with these).
+// 5 x 5, below) are the least-squares quadratic's through their records, evaluated at
+// sample a's own footprint: second-order exact, where linear interpolation on a triangle
+// leaves sum_j w_j u_j^T H u_j / 2 + tr(H (sum_j w_j S_j - S_a)) / 2, an error that
+// changes with n.v as F does and so biases R0 under small bright sources (measured on
+// 256 spp path-traced captures in the office: R0 +0.0012 to +0.0017 with linear
+// weights, +0.0003 to +0.0007 with these).
 //
 // The comparison multiplies the other view's noise by F_a / F_j: up to about 9 where
 // sample a is grazing (F ~ 0.35) and the other view sees r head-on (F = R0). Those are
@@ -41,7 +40,7 @@
 // path-traced at 256 spp (the case where R0's noise costs most: Rd's error is about 13
 // times R0's), six seeds: R0 within -0.0019 to +0.0009 (mean +0.0001) against -0.0016
 // to +0.0023 (mean +0.0011) through 3 x 3 everywhere. Through 5 x 5 everywhere the mean
-// is +0.0003 and the spread as wide (-0.0011 to +0.0015); through 7 x 7 where the other
+// is +0.0004 and the spread as wide (-0.0011 to +0.0015); through 7 x 7 where the other
 // view is nearer its normal, -0.0021 to +0.0003. The price is a wider patch for the
 // quadratic: at 160 x 160 the white spheres under the real maps go from R0 -0.0002 and
 // -0.0001 to -0.0019 and -0.0009 (St Fagans, Lebombo), their detail smoothed.
@@ -72,7 +71,8 @@ class CrossViewSystem {
   // pixel samples (the pixel grid is the interpolation mesh). Throws glaze::Error when no
   // two views see a common direction. The pairs' noise model is estimated from the
   // captures' pixel-to-pixel residuals (cross_view.cpp), or for `noise_free` captures a
-  // fixed fraction of each pixel's level.
+  // fixed fraction of each pixel's level; `noise_free` captures also keep every pair's
+  // quadratic on 3 x 3 pixels (nothing to average: see above).
   CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free);
 
   // The noise model's floor, relative to a sample's level, and noise-free captures' whole
@@ -120,20 +120,27 @@ class CrossViewSystem {
     std::array<float, kWidestStencil> weight;
   };
   // Sample `sample` of view a and the other view's stencil, stored flat at `first` in
-  // members_ and weights_ (most stencils are 3 x 3: a 5 x 5 slot for each would more
-  // than double the pairs' memory).
+  // members_ and weights_ (all stencils are 3 x 3 on noise-free captures, about half on
+  // captures with noise: a 5 x 5 slot for each would more than double the pairs' memory).
   struct Pair {
     uint32_t sample;
     uint32_t count;
     size_t first;
   };
-  // Replaces the stencil's linear weights on its triangle by the quadratic's on the 3 x 3
-  // or (`average_noise`, see above) 5 x 5 pixels around the corner nearest r; leaves it as
-  // it is where too few pixels exist or their quadratic is ill-conditioned. `steps`: per
-  // sample, the change of its reflected direction per pixel along the film's x and y.
+  // Replaces the stencil's linear weights on its triangle by the quadratic's on the 5 x 5
+  // pixels around the corner nearest r (with `average_noise`, where the other view sees r
+  // nearer its normal than `sample` does: see above), else or where that fails on the
+  // 3 x 3; leaves it as it is where too few pixels exist or their quadratic is
+  // ill-conditioned. `steps`: per sample, the change of its reflected direction per pixel
+  // along the film's x and y.
   void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                  const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool average_noise,
                                  Stencil& s) const;
+  // The quadratic's weights on the (2 reach + 1)^2 pixels around `corner` (the other
+  // view's sample nearest r), written to `s`; false, leaving `s` as it is, where too few
+  // exist or their quadratic is ill-conditioned.
+  bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples, const std::vector<std::array<Vec3, 2>>& steps,
+                         uint32_t sample, uint32_t corner, int reach, Stencil& s) const;
   // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
   std::vector<double> inverse_fresnel(double R0) const;
   // The residual's data and diffuse parts of pair p at the R0 of `inverse_F`, and its
