@@ -113,7 +113,7 @@ options of `invert-fit`:
   --mode joint:       as lighting, without the material (full-band captures: Rd from
                       the solve map turned by 0, 1/4, 1/2, 3/4 of a texel in azimuth),
                       --max-iterations N (rounds of each pass, default 20),
-                      --max-passes N (default 8; 1: one pass): passes that end with R0
+                      --max-passes N (default 12; 1: one pass): passes that end with R0
                       or Rd still moving are reported (fit.json passes_settled) and warned
   --threads N         worker threads (default: all cores; the results do not depend on it)
   --preview           a window: each view observed, predicted and |residual| x8,
