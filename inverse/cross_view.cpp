@@ -5,6 +5,7 @@
 #include "renderer/material.h"
 #include "renderer/math.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -367,9 +368,28 @@ void CrossViewSystem::pair_terms(const Pair& p, const std::vector<double>& inver
   weight = variance.cwiseInverse();
 }
 
-Eigen::MatrixXd CrossViewSystem::solve(const std::vector<double>& inverse_F, const Eigen::MatrixXd* reweight_at,
-                                       double c2) const {
+CrossViewSystem::PairTerms CrossViewSystem::pair_terms(double R0) const {
+  const std::vector<double> inverse_F = inverse_fresnel(R0);
   const size_t used = (pairs_.size() + stride_ - 1) / stride_;
+  PairTerms terms;
+  terms.x.resize(n_, Eigen::Index(used));
+  terms.y.resize(Eigen::Index(used), 3);
+  terms.weight.resize(Eigen::Index(used), 3);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, used, kChunk), [&](const tbb::blocked_range<size_t>& range) {
+    Eigen::VectorXd x(n_);
+    Eigen::Vector3d y, weight;
+    for (size_t p = range.begin(); p < range.end(); ++p) {
+      pair_terms(pairs_[p * stride_], inverse_F, x, y, weight);
+      terms.x.col(Eigen::Index(p)) = x.cast<float>();
+      terms.y.row(Eigen::Index(p)) = y.transpose();
+      terms.weight.row(Eigen::Index(p)) = weight.transpose();
+    }
+  });
+  return terms;
+}
+
+Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2) const {
+  const size_t used = size_t(terms.y.rows());
   const size_t chunks = (used + kChunk - 1) / kChunk;
   struct Sums {
     std::array<Eigen::MatrixXd, 3> xx;
@@ -377,16 +397,15 @@ Eigen::MatrixXd CrossViewSystem::solve(const std::vector<double>& inverse_F, con
   };
   std::vector<Sums> partial(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
-    const size_t first = chunk * kChunk, rows = std::min(used, first + kChunk) - first;
-    Eigen::MatrixXd X(n_, rows), Y(rows, 3), W(rows, 3);
-    Eigen::Vector3d y, weight;
-    for (size_t r = 0; r < rows; ++r) {
-      pair_terms(pairs_[(first + r) * stride_], inverse_F, X.col(r), y, weight);
-      double robust = 1.0;
-      if (reweight_at) robust = 1.0 / (1.0 + (y - reweight_at->transpose() * X.col(r)).cwiseAbs2().dot(weight) / (3.0 * c2));
-      W.row(r) = robust * weight.transpose();
-      Y.row(r) = y.transpose();
-    }
+    const Eigen::Index first = Eigen::Index(chunk * kChunk), rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
+    const Eigen::MatrixXd X = terms.x.middleCols(first, rows).cast<double>();
+    const auto Y = terms.y.middleRows(first, rows);
+    Eigen::MatrixXd W = terms.weight.middleRows(first, rows);
+    if (reweight_at)
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const Eigen::Vector3d residual = Y.row(r).transpose() - reweight_at->transpose() * X.col(r);
+        W.row(r) /= 1.0 + residual.cwiseAbs2().dot(W.row(r).transpose()) / (3.0 * c2);
+      }
     Sums& s = partial[chunk];
     s.xy.resize(n_, 3);
     // X W X^T is symmetric: a rank update of its lower triangle by X sqrt(W) does half
@@ -409,14 +428,12 @@ Eigen::MatrixXd CrossViewSystem::solve(const std::vector<double>& inverse_F, con
   return d;
 }
 
-std::vector<double> CrossViewSystem::normalised_residuals(const std::vector<double>& inverse_F,
-                                                          const Eigen::MatrixXd& d) const {
-  std::vector<double> squared((pairs_.size() + stride_ - 1) / stride_);
+std::vector<double> CrossViewSystem::normalised_residuals(const PairTerms& terms, const Eigen::MatrixXd& d) const {
+  std::vector<double> squared(size_t(terms.y.rows()));
   tbb::parallel_for(size_t(0), squared.size(), [&](size_t p) {
-    Eigen::VectorXd x(n_);
-    Eigen::Vector3d y, weight;
-    pair_terms(pairs_[p * stride_], inverse_F, x, y, weight);
-    squared[p] = (y - d.transpose() * x).cwiseAbs2().dot(weight) / 3.0;
+    const Eigen::Index k = Eigen::Index(p);
+    const Eigen::Vector3d residual = terms.y.row(k).transpose() - d.transpose() * terms.x.col(k).cast<double>();
+    squared[p] = residual.cwiseAbs2().dot(terms.weight.row(k).transpose()) / 3.0;
   });
   return squared;
 }
@@ -432,36 +449,37 @@ constexpr double kCauchy = 2.385;
 // of the level). Real noise (1-9% of the level at 256 spp) is far above it.
 constexpr double kMinimumScale = 1e-3 / CrossViewSystem::kNoiseFloor;
 
-CrossViewSystem::Fit CrossViewSystem::fit(double R0) const {
+CrossViewSystem::Fit CrossViewSystem::fit(double R0) const { return fit(pair_terms(R0)); }
+
+CrossViewSystem::Fit CrossViewSystem::fit(const PairTerms& terms) const {
   Fit result;
-  const std::vector<double> inverse_F = inverse_fresnel(R0);
   if (!std::isfinite(scale_)) {  // not calibrated yet: plain least squares
-    result.d = solve(inverse_F, nullptr, 0.0);
-    for (double z : normalised_residuals(inverse_F, result.d)) result.cost += z;
+    result.d = solve(terms, nullptr, 0.0);
+    for (double z : normalised_residuals(terms, result.d)) result.cost += z;
     return result;
   }
   const double c2 = kCauchy * kCauchy * scale_ * scale_;
   // Iteratively reweighted: each solve weighs the pairs by the residuals of the last.
   constexpr int kReweightings = 3;
-  result.d = solve(inverse_F, nullptr, c2);
-  for (int iteration = 1; iteration < kReweightings; ++iteration) result.d = solve(inverse_F, &result.d, c2);
-  const std::vector<double> squared = normalised_residuals(inverse_F, result.d);
+  result.d = solve(terms, nullptr, c2);
+  for (int iteration = 1; iteration < kReweightings; ++iteration) result.d = solve(terms, &result.d, c2);
+  const std::vector<double> squared = normalised_residuals(terms, result.d);
   for (double z : squared) result.cost += 0.5 * c2 * std::log1p(z / c2);
   return result;
 }
 
 void CrossViewSystem::calibrate(double R0) {
   // The scale from the least-squares residuals, then again from the robust fit's.
-  const std::vector<double> inverse_F = inverse_fresnel(R0);
+  const PairTerms terms = pair_terms(R0);
   auto median_magnitude = [&](const Eigen::MatrixXd& fitted) {
-    std::vector<double> magnitude = normalised_residuals(inverse_F, fitted);
+    std::vector<double> magnitude = normalised_residuals(terms, fitted);
     for (double& z : magnitude) z = std::sqrt(z);
     std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
     return std::max(1.4826 * magnitude[magnitude.size() / 2], 1e-30);
   };
   scale_ = INFINITY;
-  scale_ = std::max(median_magnitude(fit(R0).d), kMinimumScale);
-  scale_ = std::max(median_magnitude(fit(R0).d), kMinimumScale);
+  scale_ = std::max(median_magnitude(fit(terms).d), kMinimumScale);
+  scale_ = std::max(median_magnitude(fit(terms).d), kMinimumScale);
 }
 
 Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, int width, int height, double* seen) const {
