@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -79,7 +80,13 @@ struct Job {
         summary += " refined " + std::to_string(sh->refined_supersampling);
       }
     } else {
-      RenderResult result = render(tracer, camera, options);
+      // Each camera draws its own random streams (render.h): views of one set have
+      // independent noise.
+      RenderOptions view_options = options;
+      view_options.camera = uint64_t(std::find_if(scene.cameras.begin(), scene.cameras.end(),
+                                                  [&](const CameraSpec& c) { return c.name == spec.name; }) -
+                                     scene.cameras.begin());
+      RenderResult result = render(tracer, camera, view_options);
       image = std::move(result.image);
       metadata["glaze:integrator"] = "path";
       metadata["glaze:spp"] = std::to_string(result.spp);

@@ -17,6 +17,12 @@ namespace {
 
 constexpr int kTile = 16;
 
+// A pixel's stream index is camera << kCameraShift plus its index in the image: images up
+// to 2^40 pixels, and 2^22 cameras, keep the PCG sequences (2 index, 2 index + 1) distinct
+// within their 63 bits.
+constexpr int kCameraShift = 40;
+constexpr uint64_t kCameraCount = uint64_t(1) << 22;
+
 class ProgressBar {
  public:
   ProgressBar(bool enabled, int total) : enabled_(enabled), total_(total) {}
@@ -49,7 +55,9 @@ ProgressiveRender::ProgressiveRender(const PathTracer& tracer, const PinholeCame
       options_(options),
       arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
   if (options.spp < 1) throw Error("samples per pixel must be at least 1");
+  if (options.camera >= kCameraCount) throw Error("camera index " + std::to_string(options.camera) + " is too large");
   const size_t pixels = size_t(camera.width) * camera.height;
+  if (pixels >= (uint64_t(1) << kCameraShift)) throw Error("the image has too many pixels to render");
   sum_.assign(pixels * 3, 0.0);
   pass_.assign(pixels * 3, 0.0);
   luminance_sum_.assign(pixels, 0.0);
@@ -76,11 +84,13 @@ bool ProgressiveRender::add_pass(const std::atomic<bool>* cancel, const std::fun
       for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
         for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
           const uint64_t pixel = uint64_t(y) * width + x;
-          // Two streams per pixel (PCG sequences 2p and 2p + 1): the scramble, one for
-          // all passes so that passes continue one sequence, and the path samples.
-          Pcg32 scramble(options_.seed, 2 * pixel);
+          // Two streams per pixel (PCG sequences 2i and 2i + 1, i its index among all
+          // cameras' pixels): the scramble, one for all passes so that passes continue one
+          // sequence, and the path samples.
+          const uint64_t stream = (options_.camera << kCameraShift) + pixel;
+          Pcg32 scramble(options_.seed, 2 * stream);
           const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
-          Pcg32 rng(options_.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * pixel + 1);
+          Pcg32 rng(options_.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * stream + 1);
           for (int s = 0; s < spp; ++s) {
             const Vec2 offset = options_.pixel_centres
                                     ? Vec2(0.5f, 0.5f)
