@@ -83,9 +83,7 @@ struct Job {
       // Each camera draws its own random streams (render.h): views of one set have
       // independent noise.
       RenderOptions view_options = options;
-      view_options.camera = uint64_t(std::find_if(scene.cameras.begin(), scene.cameras.end(),
-                                                  [&](const CameraSpec& c) { return c.name == spec.name; }) -
-                                     scene.cameras.begin());
+      view_options.camera = uint64_t(&scene.camera(spec.name) - scene.cameras.data());
       RenderResult result = render(tracer, camera, view_options);
       image = std::move(result.image);
       metadata["glaze:integrator"] = "path";
