@@ -72,8 +72,10 @@ class CrossViewSystem {
   // two views see a common direction. The pairs' noise model is estimated from the
   // captures' pixel-to-pixel residuals (cross_view.cpp), or for `noise_free` captures a
   // fixed fraction of each pixel's level; `noise_free` captures also keep every pair's
-  // quadratic on 3 x 3 pixels (nothing to average: see above).
-  CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free);
+  // quadratic on 3 x 3 pixels (nothing to average: see above). `trim`: the diffuse field
+  // is trimmed (cross_view.cpp), for captures that the model fits up to the
+  // interpolation's error: noise-free, with a band-limited diffuse term.
+  CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free, bool trim);
 
   // The noise model's floor, relative to a sample's level, and noise-free captures' whole
   // model: residuals that small are the pixel grids' interpolation error, not noise.
@@ -81,7 +83,8 @@ class CrossViewSystem {
   ~CrossViewSystem();
 
   // The robust misfit at R0 (Cauchy loss of the pair residuals, each divided by its
-  // noise), minimised over the diffuse field d by iteratively reweighted least squares.
+  // noise), minimised over the diffuse field d by iteratively reweighted least squares;
+  // with `trim` d is then trimmed and the misfit taken at it.
   struct Fit {
     double cost = 0.0;
     Eigen::MatrixXd d;  // per channel (columns)
@@ -162,8 +165,9 @@ class CrossViewSystem {
   // The robust fit (fit) on one R0's pair terms.
   Fit fit(const PairTerms& terms) const;
   // Weighted least squares for d; pair weights: the inverse noise variance, times the
-  // Cauchy weight (scale^2 c2) of the pair's residual at `reweight_at` when given.
-  Eigen::MatrixXd solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2) const;
+  // robust weight of the pair's residual at `reweight_at` when given: Cauchy's, or
+  // Welsch's where `trim`; c2 is the loss's width squared, in units of the noise model.
+  Eigen::MatrixXd solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2, bool trim = false) const;
   // Per pair in use, its residual's squared norm in units of its noise.
   std::vector<double> normalised_residuals(const PairTerms& terms, const Eigen::MatrixXd& d) const;
 
@@ -174,6 +178,7 @@ class CrossViewSystem {
   std::vector<uint32_t> members_;
   std::vector<float> weights_;
   std::vector<RGB> variance_;    // per sample and channel: the noise model
+  bool trim_;
   double scale_ = INFINITY;      // robust scale of the normalised residuals
   size_t stride_ = 1;
 };

@@ -52,7 +52,7 @@ double relative_rms_at_truth(bool noise_free) {
   LightingData data = gather_lighting_data(samples, captures, tracer, 4, 1);
   for (size_t k = 0; k < data.observed.size(); ++k)
     data.observed[k] = RGB::Constant(float(schlick_fresnel(kR0, double(data.mu[k])) * smooth_lighting(data.reflected[k])));
-  const CrossViewSystem cross(data, samples, noise_free);
+  const CrossViewSystem cross(data, samples, noise_free, /*trim=*/false);  // uncalibrated: least squares
   EXPECT_GT(cross.pair_count(), 10000u);
   const CrossViewSystem::Fit at = cross.fit(kR0);
   const double rms = CrossViewSystem::kNoiseFloor * std::sqrt(at.cost / double(cross.pair_count()));

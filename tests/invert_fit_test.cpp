@@ -285,8 +285,11 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
 // --mode joint on noise-free captures (the sh integrator at ss 1, 256x256, three views)
 // against the bounds: R0 within 0.001, Rd within 0.003, the lighting's absolute
 // scale (recovered over true L00) within 3% and L_lm (l <= 2) within 3% of L00.
-// Measured: R0 within 0.0001 everywhere; Rd within 0.0011 in the rooms, 0.0028 under
-// St Fagans (the red sphere's red channel) and 0.0005 under Lebombo; scale within 0.3%.
+// Measured: R0 within 0.0002 everywhere; Rd within 0.0003 in the rooms, 0.0029 under
+// St Fagans (the red sphere's red channel), 0.0007 under Lebombo and 0.0020 under
+// studio_small_03, whose small lamps carry most of its light; scale within 1.3%. Under
+// the studio's lamps the red sphere needs the trimmed diffuse field (cross_view.cpp):
+// with the Cauchy fit alone its Rd was off by 0.024.
 void expect_joint_bounds(const TemporaryDirectory& dir, const std::string& scene, const std::string& environment) {
   const std::string folder = captures(dir, scene, "joint", "--integrator sh --ss 1 --res 256x256 --holdout novel_0,novel_1 " + environment);
   const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
@@ -312,7 +315,7 @@ TEST(InvertFitJoint, NoiseFreeRoomsMeetTheBounds) {
 }
 
 TEST(InvertFitJoint, NoiseFreeRealMapsMeetTheBounds) {
-  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr"}) {
+  for (const char* name : {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr", "studio_small_03_1k.hdr"}) {
     GLAZE_REQUIRE_ENVMAP(map, name);
     TemporaryDirectory dir;
     for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
