@@ -47,7 +47,9 @@
 //
 // Where the lighting has detail finer than the sample spacing (a window's edge, a small
 // lamp) no interpolation is right and the equation does not hold; such pairs are
-// outliers and a robust reweighting removes them.
+// outliers, which a robust reweighting (Cauchy's) down-weights; on noise-free captures
+// with a band-limited diffuse term, where they are the only misfit, a trimming then
+// drops them (cross_view.cpp, kTrim).
 #pragma once
 
 #include "inverse/lighting_fit.h"
