@@ -90,12 +90,14 @@ constexpr double kR0Tolerance = 1e-4;
 // The grid must resolve the interpolant, not sample it again: a source smaller than a
 // texel (studio_small_03's lamps, empty_warehouse_01's, St Fagans' window panes) is
 // counted by whether a texel centre falls on its peak, an error that more pixels on the
-// object do not reduce. Measured, noise-free sh captures (ss 1, three views), the red
-// sphere (Rd 0.9765): on 256x128, L_00 off by -4.1% and Rd by +0.036 under St Fagans at
-// 512x512, -2.2% and +0.022 under the warehouse; on 1024x512 (converged: 2048x1024
-// agrees to 0.1%) +0.2% and -0.0022, -0.2% and +0.0020. What remains is the captures'
-// own sampling of those sources, which shrinks with their resolution: at 256x256 the
-// same grid reads +1.1% and +1.0% (Rd -0.011 and -0.010). About 0.3 s per evaluation.
+// object do not reduce. Measured on noise-free sh captures (ss 1, three 512 x 512 views)
+// of the red sphere (Rd 0.9765): on 256 x 128, L_00 off by -3.6% to -4.1% (by channel)
+// and Rd by +0.036 under St Fagans, -1.4% to -2.2% and +0.022 under the warehouse; on
+// 1024 x 512 (2048 x 1024 agrees to 0.1%) +0.2% and -0.0022, -0.2% and +0.0020. What
+// remains is the views' own sampling of those sources, which shrinks with their
+// resolution: at 256 x 256 it leaves L_00 off by +1.1% to +1.3% and +1.0% to +1.9%
+// (Rd -0.011 and -0.0095). The finer grid adds 0.7-1.0 s to a fit of three 512 x 512
+// views (BM_JointFit3x512).
 constexpr int kMirrorIntegralWidth = 1024, kMirrorIntegralHeight = 512;
 
 // The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
