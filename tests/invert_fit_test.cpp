@@ -336,8 +336,8 @@ TEST(InvertFitJoint, NoiseFreeRealMapsMeetTheBounds) {
 // issue's noise-free 0.003 here (at 512x512 too: -0.0086), and meets its path-traced
 // 0.01. The remaining error is in the red sphere's red channel: L00 of its mirror
 // estimates is +0.9% at 512x512, against +0.1% in green and blue, where the diffuse
-// term is near zero. There the mirror is 7% of the light, so (o - c.d) / F carries the
-// diffuse field's error about thirteenfold.
+// term is near zero (there the mirror is 7% of the light: README, "Small bright
+// sources").
 TEST(InvertFitJoint, StudioLampsNeedTheTrimmedDiffuseField) {
   GLAZE_REQUIRE_ENVMAP(map, "studio_small_03_1k.hdr");
   TemporaryDirectory dir;
