@@ -18,11 +18,12 @@
 //    When the captures' diffuse term is band-limited at the fit's lmax (glaze's `sh`
 //    integrator), the level is L_00 of the views' own mirror estimates (o - c.d) / F,
 //    which is then exact but for the views' sampling of sources smaller than their
-//    pixels' spacing (joint_fit.cpp, kMirrorIntegralWidth). Otherwise (photographs, the path tracer: the diffuse term has
-//    every band) the unmodelled bands, divided by F ~ R0 near the normal, would bias that
-//    estimate; there Rd minimises the map-consistent lighting solve's misfit
-//    (lighting_fit.h), which weights the mirror by F^2, summed over the solve map
-//    turned by four fractions of a texel (joint_fit.cpp, TurnedMapSystems, says why).
+//    pixels' spacing (joint_fit.cpp, kMirrorIntegralWidth). Otherwise (photographs, the
+//    path tracer: the diffuse term has every band) the unmodelled bands, divided by
+//    F ~ R0 near the normal, would bias that estimate; there Rd minimises the
+//    map-consistent lighting solve's misfit (lighting_fit.h), which weights the mirror
+//    by F^2, summed over the solve map turned by four fractions of a texel
+//    (joint_fit.cpp, TurnedMapSystems, says why).
 //
 // Full-band captures need one more thing: both steps model the diffuse term up to the
 // fit's lmax, and under small bright sources the bands above it (about 5% of the diffuse
