@@ -312,29 +312,30 @@ TEST(InvertFitJoint, NoiseFreeRoomsMeetTheBounds) {
   }
 }
 
+// expect_joint_bounds for the red and the white sphere under the real map `name` (skipped
+// with a message when the map is absent), at `resolution`.
+void expect_joint_bounds_under_map(const char* name, const std::string& resolution, double rd_bound = 0.003) {
+  GLAZE_REQUIRE_ENVMAP(map, name);
+  TemporaryDirectory dir;
+  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
+    SCOPED_TRACE(scene);
+    expect_joint_bounds(dir, scene, "--res " + resolution + " --env " + map.string(), rd_bound);
+  }
+}
+
 // St Fagans at the scenes' own 512x512: its window panes are smaller than the views'
 // sample spacing at 256x256, where step 2's L_00 counts them by where the pixels fall
 // (joint_fit.cpp, kMirrorIntegralWidth): the red sphere's Rd -0.011 there. Measured at
 // 512x512: R0 within 0.0001, Rd within 0.0022 (the red sphere's red channel), scale
 // within 0.3%. On the 256x128 grid step 2 used before, the red sphere was at Rd +0.036.
 TEST(InvertFitJoint, NoiseFreeStFagansMeetsTheBoundsAt512) {
-  GLAZE_REQUIRE_ENVMAP(map, "st_fagans_interior_1k.hdr");
-  TemporaryDirectory dir;
-  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
-    SCOPED_TRACE(scene);
-    expect_joint_bounds(dir, scene, "--res 512x512 --env " + map.string());
-  }
+  expect_joint_bounds_under_map("st_fagans_interior_1k.hdr", "512x512");
 }
 
 // Lebombo, whose sources are larger than the views' pixels, at 256x256. Measured: R0
 // within 0.0001, Rd within 0.0003, scale within 0.1% (at 512x512: Rd within 0.0001).
 TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) {
-  GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  TemporaryDirectory dir;
-  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
-    SCOPED_TRACE(scene);
-    expect_joint_bounds(dir, scene, "--res 256x256 --env " + map.string());
-  }
+  expect_joint_bounds_under_map("lebombo_1k.hdr", "256x256");
 }
 
 // studio_small_03, whose small lamps carry most of its light (256x256): the diffuse field
@@ -347,12 +348,7 @@ TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) {
 // term is near zero (there the mirror is 7% of the light: README, "Small bright
 // sources").
 TEST(InvertFitJoint, StudioLampsNeedTheTrimmedDiffuseField) {
-  GLAZE_REQUIRE_ENVMAP(map, "studio_small_03_1k.hdr");
-  TemporaryDirectory dir;
-  for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
-    SCOPED_TRACE(scene);
-    expect_joint_bounds(dir, scene, "--res 256x256 --env " + map.string(), 0.01);
-  }
+  expect_joint_bounds_under_map("studio_small_03_1k.hdr", "256x256", 0.01);
 }
 
 // The fits' parallel loops sum in fixed chunks or fixed per-texel orders, so a fit gives
