@@ -36,7 +36,11 @@
 // ones keep 3 x 3, as nothing is there to average): 25 records for six unknowns, the
 // same second-order exactness, and the weights' sum of squares (the factor on that
 // view's noise variance) 0.14-0.15 against 0.38-0.56 through 3 x 3. The other pairs keep
-// 3 x 3: their noise is sample a's own. Measured on the white sphere in the blue room,
+// 3 x 3: their noise is sample a's own. So do those where the quadratic does not fit the
+// 25 pixels to within their noise (cross_view.cpp, kGoodness): across a small lamp's
+// reflection the wider quadratic smooths it by an amount that changes with n.v as F
+// does, and biases R0 (the white sphere under studio_small_03, path-traced: R0 +0.017
+// through 5 x 5 there, +0.0033 without; with the noise model's median, below). Measured on the white sphere in the blue room,
 // path-traced at 256 spp (the case where R0's noise costs most: Rd's error is about 13
 // times R0's), six seeds: R0 within -0.0019 to +0.0009 (mean +0.0001) against -0.0016
 // to +0.0023 (mean +0.0011) through 3 x 3 everywhere. Through 5 x 5 everywhere the mean
@@ -134,8 +138,8 @@ class CrossViewSystem {
   };
   // Replaces the stencil's linear weights on its triangle by the quadratic's on the 5 x 5
   // pixels around the corner nearest r (with `average_noise`, where the other view sees r
-  // nearer its normal than `sample` does: see above), else or where that fails on the
-  // 3 x 3; leaves it as it is where too few pixels exist or their quadratic is
+  // nearer its normal than `sample` does and the quadratic fits them: see above), else or
+  // where that fails on the 3 x 3; leaves it as it is where too few pixels exist or their quadratic is
   // ill-conditioned. `steps`: per sample, the change of its reflected direction per pixel
   // along the film's x and y.
   void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
@@ -143,7 +147,8 @@ class CrossViewSystem {
                                  Stencil& s) const;
   // The quadratic's weights on the (2 reach + 1)^2 pixels around `corner` (the other
   // view's sample nearest r), written to `s`; false, leaving `s` as it is, where too few
-  // exist or their quadratic is ill-conditioned.
+  // exist, their quadratic is ill-conditioned, or (reach 2) it misfits them by more than
+  // their noise (the noise model, variance_, must be set).
   bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples, const std::vector<std::array<Vec3, 2>>& steps,
                          uint32_t sample, uint32_t corner, int reach, Stencil& s) const;
   // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
