@@ -40,10 +40,11 @@
 // 25 pixels to within their noise (cross_view.cpp, kGoodness): across a small lamp's
 // reflection the wider quadratic smooths it by an amount that changes with n.v as F
 // does, and biases R0 (the white sphere under studio_small_03, path-traced: R0 +0.017
-// through 5 x 5 there, +0.0033 without; with the noise model's median, below). Measured on the white sphere in the blue room,
-// path-traced at 256 spp (the case where R0's noise costs most: Rd's error is about 13
-// times R0's), six seeds: R0 within -0.0019 to +0.0009 (mean +0.0001) against -0.0016
-// to +0.0023 (mean +0.0011) through 3 x 3 everywhere. Through 5 x 5 everywhere the mean
+// through 5 x 5 there, +0.0033 without; with the noise model's median, below). Measured
+// on the white sphere in the blue room, path-traced at 256 spp (the case where R0's
+// noise costs most: Rd's error is about 13 times R0's), six seeds: R0 within -0.0019 to
+// +0.0009 (mean +0.0001) against -0.0016 to +0.0023 (mean +0.0011) through 3 x 3
+// everywhere. Through 5 x 5 everywhere the mean
 // is +0.0004 and the spread as wide (-0.0011 to +0.0015); through 7 x 7 where the other
 // view is nearer its normal, -0.0021 to +0.0003. The price is a wider patch for the
 // quadratic: at 160 x 160 the white spheres under the real maps go from R0 -0.0002 and
@@ -139,8 +140,8 @@ class CrossViewSystem {
   // Replaces the stencil's linear weights on its triangle by the quadratic's on the 5 x 5
   // pixels around the corner nearest r (with `average_noise`, where the other view sees r
   // nearer its normal than `sample` does and the quadratic fits them: see above), else or
-  // where that fails on the 3 x 3; leaves it as it is where too few pixels exist or their quadratic is
-  // ill-conditioned. `steps`: per sample, the change of its reflected direction per pixel
+  // where that fails on the 3 x 3; leaves it as it is where too few pixels exist or their
+  // quadratic is ill-conditioned. `steps`: per sample, the change of its reflected direction per pixel
   // along the film's x and y.
   void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                  const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool average_noise,

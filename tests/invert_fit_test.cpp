@@ -51,6 +51,17 @@ void expect_material(const nlohmann::json& result, double R0_tolerance, double R
   EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
 }
 
+// A joint fit's accuracy: R0 and Rd against the captures' true material, and the
+// lighting's absolute scale (recovered over true L00) against 1.
+void expect_joint_accuracy(const nlohmann::json& result, double R0_bound, double Rd_bound, double scale_bound) {
+  const nlohmann::json& truth = result["reference_material"];
+  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), R0_bound);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_bound) << "channel " << c;
+    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, scale_bound) << "channel " << c;
+  }
+}
+
 TEST(InvertFit, ShCapturesRecoverTheMaterialExactly) {
   TemporaryDirectory dir;
   for (const char* scene : {"red_sphere_office.gltf", "white_sphere_blue_room.gltf"}) {
@@ -290,14 +301,9 @@ void expect_joint_bounds(const TemporaryDirectory& dir, const std::string& scene
                          double rd_bound = 0.003) {
   const std::string folder = captures(dir, scene, "joint", "--integrator sh --ss 1 --holdout novel_0,novel_1 " + capture_options);
   const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
-  const nlohmann::json& truth = result["reference_material"];
   EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
   EXPECT_TRUE(result["band_limited_diffuse"].get<bool>());
-  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), rd_bound) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-  }
+  expect_joint_accuracy(result, 0.001, rd_bound, 0.03);
   EXPECT_LT(result["reference_L_lm_error_l2"].get<double>(), 0.03);
   std::filesystem::remove_all(folder);
 }
@@ -393,17 +399,12 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByLaterPasses) {
     SCOPED_TRACE(scene);
     const std::string folder = captures(dir, scene, "full_band", "--integrator sh --ss 1 --lmax 16 --res 256x256");
     const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
-    const nlohmann::json& truth = result["reference_material"];
     EXPECT_FALSE(result["band_limited_diffuse"].get<bool>());
     EXPECT_GE(result["passes"].get<int>(), 2);
     EXPECT_TRUE(result["passes_settled"].get<bool>());
     EXPECT_EQ(result["diffuse_lmax"].get<int>(), 16);
     EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
-    EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-    for (int c = 0; c < 3; ++c) {
-      EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.005) << "channel " << c;
-      EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-    }
+    expect_joint_accuracy(result, 0.001, 0.005, 0.03);
     std::filesystem::remove_all(folder);
   }
 }
@@ -426,17 +427,12 @@ nlohmann::json fit_stopped_at_two_passes(const TemporaryDirectory& dir, const st
 // A joint fit whose passes settled: R0 and the scale at the noise-free bounds (0.001, 3%),
 // Rd within `Rd_tolerance`.
 void expect_settled_joint_fit(const nlohmann::json& result, double Rd_tolerance) {
-  const nlohmann::json& truth = result["reference_material"];
   EXPECT_GE(result["passes"].get<int>(), 3);
   EXPECT_TRUE(result["passes_settled"].get<bool>());
   EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
   EXPECT_LT(result["last_pass_R0_step"].get<double>(), 1e-3);
   EXPECT_LT(result["last_pass_Rd_step"].get<double>(), 1e-3);
-  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_tolerance) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-  }
+  expect_joint_accuracy(result, 0.001, Rd_tolerance, 0.03);
 }
 
 // Passes go on while one moves R0 by 1e-3 or more (joint_fit.h). Three views (the
@@ -515,13 +511,7 @@ void expect_path_traced_joint(const std::string& scene, const std::string& optio
   TemporaryDirectory dir;
   const std::string folder =
       captures(dir, scene, "path_traced", "--spp 256 --res 256x256 --holdout novel_0,novel_1 " + options);
-  const nlohmann::json result = fit(dir, folder, "--mode joint");
-  const nlohmann::json& truth = result["reference_material"];
-  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), R0_bound);
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_bound) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, scale_bound) << "channel " << c;
-  }
+  expect_joint_accuracy(fit(dir, folder, "--mode joint"), R0_bound, Rd_bound, scale_bound);
 }
 
 // Path-traced captures: the views' pairs are weighted by a noise model estimated from the
@@ -587,12 +577,7 @@ TEST(CrossView, SmallCapturesRecoverR0) {
   TemporaryDirectory dir;
   const std::string folder = captures(dir, "white_sphere_office.gltf", "small", "--integrator sh --ss 1 --res 64x64");
   const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
-  const nlohmann::json& truth = result["reference_material"];
-  EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-  for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.02) << "channel " << c;
-    EXPECT_NEAR(result["reference_scale"][c].get<double>(), 1.0, 0.03) << "channel " << c;
-  }
+  expect_joint_accuracy(result, 0.001, 0.02, 0.03);
 }
 
 TEST(InvertFitLighting, BadInputIsReported) {
