@@ -26,26 +26,12 @@ constexpr size_t kChunk = 4096;
 // so that the triangle around a direction is found among a few.
 class ReflectedMesh {
  public:
-  ReflectedMesh(const LightingData& data, const SampleSet& set, const std::vector<uint32_t>& members) : data_(data) {
+  ReflectedMesh(const LightingData& data, const PixelGrid& pixels) : data_(data), pixels_(pixels) {
     start_.assign(kRows * kColumns + 1, 0);
-    if (members.empty()) return;  // a view that does not see the object
-    int x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN, y1 = INT32_MIN;
-    for (uint32_t k : members) {
-      const Vec2& film = set.samples[k].film;
-      x0 = std::min(x0, int(film.x())), y0 = std::min(y0, int(film.y()));
-      x1 = std::max(x1, int(film.x())), y1 = std::max(y1, int(film.y()));
-    }
-    x0_ = x0, y0_ = y0;
-    const int w = width_ = x1 - x0 + 1, h = height_ = y1 - y0 + 1;
-    grid_.assign(size_t(w) * h, -1);
-    for (uint32_t k : members) {
-      const Vec2& film = set.samples[k].film;
-      grid_[size_t(int(film.y()) - y0) * w + (int(film.x()) - x0)] = k;
-    }
-    for (int j = 0; j + 1 < h; ++j)
-      for (int i = 0; i + 1 < w; ++i) {
-        const int64_t a = grid_[size_t(j) * w + i], b = grid_[size_t(j) * w + i + 1];
-        const int64_t c = grid_[size_t(j + 1) * w + i + 1], e = grid_[size_t(j + 1) * w + i];
+    for (int j = pixels.y0(); j + 1 < pixels.y0() + pixels.height(); ++j)
+      for (int i = pixels.x0(); i + 1 < pixels.x0() + pixels.width(); ++i) {
+        const int64_t a = pixels.sample_at(i, j), b = pixels.sample_at(i + 1, j);
+        const int64_t c = pixels.sample_at(i + 1, j + 1), e = pixels.sample_at(i, j + 1);
         if (a >= 0 && b >= 0 && c >= 0) triangles_.push_back({uint32_t(a), uint32_t(b), uint32_t(c)});
         if (a >= 0 && c >= 0 && e >= 0) triangles_.push_back({uint32_t(a), uint32_t(c), uint32_t(e)});
       }
@@ -84,20 +70,8 @@ class ReflectedMesh {
     for (const auto& entry : entries) members_.push_back(entry.second);
   }
 
-  // The samples at the four pixels beside film point `film` of this view.
-  template <typename Visit>
-  void for_each_neighbour(const Vec2& film, Visit&& visit) const {
-    const int i = int(film.x()), j = int(film.y());
-    for (const auto& [di, dj] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)})
-      if (const int64_t k = sample_at(i + di, j + dj); k >= 0) visit(uint32_t(k));
-  }
-
-  // The sample at pixel (i, j) of the film, -1 where none.
-  int64_t sample_at(int i, int j) const {
-    i -= x0_, j -= y0_;
-    if (i < 0 || i >= width_ || j < 0 || j >= height_) return -1;
-    return grid_[size_t(j) * width_ + i];
-  }
+  // The view's samples by pixel.
+  const PixelGrid& pixels() const { return pixels_; }
 
   // The triangle whose directions contain `r`, and r's barycentric weights in it (the
   // central projection onto its plane); false when no triangle of this view does.
@@ -126,18 +100,13 @@ class ReflectedMesh {
  private:
   static constexpr int kColumns = 256, kRows = 128;
   const LightingData& data_;
-  int x0_ = 0, y0_ = 0, width_ = 0, height_ = 0;
-  std::vector<int64_t> grid_;  // pixel -> sample, -1 where none
+  const PixelGrid& pixels_;
   std::vector<std::array<uint32_t, 3>> triangles_;
   std::vector<uint32_t> start_, members_;
 };
 
 namespace {
 
-// The window whose residuals estimate a sample's noise: (2 kNoiseReach + 1)^2 pixels less
-// the 3 x 3 around the sample, widened (doubled) while it holds fewer than kNoiseValues.
-constexpr int kNoiseReach = 4;
-constexpr size_t kNoiseValues = 8;
 // The 5 x 5 stencils' test of fit (quadratic_weights): the misfit's chi-square may exceed
 // its degrees of freedom by this many of its standard deviations (10: about four times
 // the noise's misfit through 25 pixels). It is there to catch detail far above the noise:
@@ -146,99 +115,7 @@ constexpr size_t kNoiseValues = 8;
 // too at 160 x 160, where the wider stencil's averaging is what holds R0 (R0 +0.0049 and
 // +0.0025 on seeds 0 and 1, against +0.0037 and +0.0018 at 10).
 constexpr double kGoodness = 10.0;
-// The median of e^2 / var(e) for Gaussian e (of a chi-square variable with one degree of
-// freedom): the window's median residual over this is the noise's variance.
-constexpr double kMedianOfChiSquare1 = 0.45493642311957;
 
-// Per sample and channel, the variance of the captures' noise around it, estimated from
-// the data. A pixel's noise is what its neighbours do not predict: the residual
-//   e = o - (sum of the 4 edge neighbours) / 2 + (sum of the 4 corner neighbours) / 4
-// vanishes for any cubic in the film's coordinates, so smooth shading and the mirrored
-// lighting's gradients and curvature leave it, and for independent pixel noise of
-// variance v it has variance (1 + 4/4 + 4/16) v = 2.25 v. The median of e^2 / 2.25 over
-// the window around the sample, divided by kMedianOfChiSquare1, is its noise variance; the
-// window leaves out the sample and its 8 neighbours, whose residuals contain the sample's
-// own noise, so that a sample's noise does not set its weight. With a floor of
-// kNoiseFloor (cross_view.h) times the level (the four neighbours' mean, plus 1% of the
-// mean observation).
-//
-// The median, not the mean: where the lighting has detail the pixels do not resolve (a
-// small lamp's reflection, a window's edge) e is that detail, large in a few pixels of
-// the window, and the mean counts it as noise. The pairs there then carry a variance that
-// makes their misfit (the interpolation's, not the noise's) look like noise, and the
-// robust loss keeps them; with the median they stay outliers, and the 5 x 5 stencils'
-// test of fit (quadratic_weights) sees the detail. Measured on path-traced captures of
-// the white sphere under studio_small_03 (256 spp, 256 x 256, seeds 0-2), R0 +0.017,
-// +0.013, +0.021 with the mean; +0.0070, +0.0048, +0.0082 with the median; +0.0033,
-// +0.0022, +0.0038 with the test of fit as well (README, "Small lamps, path-traced").
-//
-// Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
-// is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp
-// captures of the white sphere in the blue room, it is 4% of the level near the normal and
-// 1.5% at n.v = 0.2-0.3, where the mirror carries much of the level; weighting by the
-// level instead (glaze's first model) misweighs the grazing pairs that fix R0, and
-// the joint fit ends at R0 0.009 instead of 0.0385, for every seed. Photographs' noise
-// (shot and read noise) is not proportional to the level either.
-//
-// `noise_free` captures (glaze's sh integrator, which is deterministic) take the floor
-// everywhere. Their residuals e are the signal's detail, not noise: in a channel that
-// only the mirror lights (the red sphere's green and blue) they are the reflected map's
-// texture, 4-9% of the level under St Fagans at one ray per pixel, which would
-// down-weight the detailed pairs for noise they do not have.
-std::vector<RGB> estimate_noise(const LightingData& data, const SampleSet& samples,
-                                const std::vector<ReflectedMesh>& meshes, bool noise_free) {
-  const size_t count = samples.samples.size();
-  auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
-  std::vector<RGBd> residual(count, RGBd::Constant(-1.0));  // e^2 / 2.25; -1: a neighbour is missing
-  if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
-    const auto [i, j] = pixel_of(k);
-    RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        if (di == 0 && dj == 0) continue;
-        const int64_t m = mesh.sample_at(i + di, j + dj);
-        if (m < 0) return;
-        (di == 0 || dj == 0 ? edges : corners) += data.observed[m].cast<double>();
-      }
-    residual[k] = (data.observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25;
-  });
-  RGBd mean = RGBd::Zero();
-  for (const RGB& o : data.observed) mean += o.cast<double>();
-  const RGBd offset = (0.01 * mean / double(count)).max(1e-12);
-  std::vector<RGB> variance(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    const ReflectedMesh& mesh = meshes[samples.samples[k].frame];
-    const auto [i, j] = pixel_of(k);
-    RGBd level = RGBd::Zero();
-    int neighbours = 0;
-    mesh.for_each_neighbour(samples.samples[k].film, [&](uint32_t m) {
-      level += data.observed[m].cast<double>();
-      ++neighbours;
-    });
-    level = neighbours > 0 ? RGBd(level / neighbours) : data.observed[k].cast<double>();
-    std::array<std::vector<double>, 3> values;
-    for (auto& v : values) v.reserve(size_t(2 * kNoiseReach + 1) * size_t(2 * kNoiseReach + 1));
-    for (int reach = kNoiseReach; !noise_free && values[0].size() < kNoiseValues && reach <= 4 * kNoiseReach; reach *= 2) {
-      for (auto& v : values) v.clear();
-      for (int dj = -reach; dj <= reach; ++dj)
-        for (int di = -reach; di <= reach; ++di)
-          if (std::max(std::abs(di), std::abs(dj)) > 1)
-            if (const int64_t m = mesh.sample_at(i + di, j + dj); m >= 0 && residual[m][0] >= 0.0)
-              for (int c = 0; c < 3; ++c) values[c].push_back(residual[m][c]);
-    }
-    const RGBd floor = (CrossViewSystem::kNoiseFloor * (level.abs() + offset)).square();
-    RGBd estimate = floor;
-    if (!values[0].empty())
-      for (int c = 0; c < 3; ++c) {
-        std::vector<double>& v = values[c];
-        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-        estimate[c] = std::max(v[v.size() / 2] / kMedianOfChiSquare1, floor[c]);
-      }
-    variance[k] = estimate.cast<float>();
-  });
-  return variance;
-}
 
 }  // namespace
 
@@ -247,23 +124,22 @@ CrossViewSystem::~CrossViewSystem() = default;
 CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free, bool trim)
     : data_(data), n_(int(data.cc.rows())), trim_(trim) {
   if (!samples.pixels) throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
-  const int views = int(samples.per_frame.size());
-  std::vector<std::vector<uint32_t>> members(views);
-  for (uint32_t k = 0; k < samples.samples.size(); ++k) members[samples.samples[k].frame].push_back(k);
-  meshes_.reserve(views);
-  for (int f = 0; f < views; ++f) meshes_.emplace_back(data, samples, members[f]);
-  variance_ = estimate_noise(data, samples, meshes_, noise_free);
   const size_t count = samples.samples.size();
+  if (data.noise.size() != count) throw Error("the views' comparison needs the captures' noise model (estimate_noise)");
+  const int views = int(samples.per_frame.size());
+  grids_ = pixel_grids(samples);
+  meshes_.reserve(views);
+  for (int f = 0; f < views; ++f) meshes_.emplace_back(data, grids_[f]);
   // Per sample, the change of its reflected direction per pixel along the film's x and y
   // (central differences where both neighbours exist): its footprint's shape.
   std::vector<std::array<Vec3, 2>> steps(count, {Vec3::Zero(), Vec3::Zero()});
   tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const Sample& s = samples.samples[k];
-    const ReflectedMesh& mesh = meshes_[s.frame];
+    const PixelGrid& grid = grids_[s.frame];
     const int i = int(s.film.x()), j = int(s.film.y());
     for (int axis = 0; axis < 2; ++axis) {
-      const int64_t plus = mesh.sample_at(i + (axis == 0), j + (axis == 1));
-      const int64_t minus = mesh.sample_at(i - (axis == 0), j - (axis == 1));
+      const int64_t plus = grid.sample_at(i + (axis == 0), j + (axis == 1));
+      const int64_t minus = grid.sample_at(i - (axis == 0), j - (axis == 1));
       if (plus >= 0 && minus >= 0) steps[k][axis] = 0.5f * (data.reflected[plus] - data.reflected[minus]);
       else if (plus >= 0) steps[k][axis] = data.reflected[plus] - data.reflected[k];
       else if (minus >= 0) steps[k][axis] = data.reflected[k] - data.reflected[minus];
@@ -325,7 +201,7 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
   int n = 0;
   for (int dj = -reach; dj <= reach; ++dj)
     for (int di = -reach; di <= reach; ++di)
-      if (const int64_t k = mesh.sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
+      if (const int64_t k = mesh.pixels().sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
   if (n < (2 * reach + 1) * (2 * reach + 1) - 1) return false;
   // Coordinates on the plane tangent at r (the central projection, as the triangles'
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
@@ -379,7 +255,7 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
     const double dof = n - 6.0, bound = dof + kGoodness * std::sqrt(2.0 * dof);
     for (int c = 0; c < 3; ++c) {
       double chi2 = 0.0;
-      for (int m = 0; m < n; ++m) chi2 += misfit(m, c) * misfit(m, c) / double(variance_[members[m]][c]);
+      for (int m = 0; m < n; ++m) chi2 += misfit(m, c) * misfit(m, c) / double(data_.noise[members[m]][c]);
       if (!(chi2 < bound)) return false;
     }
   }
@@ -404,13 +280,13 @@ void CrossViewSystem::pair_terms(const Pair& p, const std::vector<double>& inver
   const double Fa = 1.0 / inverse_F[p.sample];
   x = data_.c_row(p.sample).cast<double>();
   y = data_.observed[p.sample].cast<double>().matrix();
-  Eigen::Vector3d variance = variance_[p.sample].cast<double>().matrix();
+  Eigen::Vector3d variance = data_.noise[p.sample].cast<double>().matrix();
   for (size_t i = p.first; i < p.first + p.count; ++i) {
     const uint32_t j = members_[i];
     const double ratio = Fa * weights_[i] * inverse_F[j];
     x -= ratio * data_.c_row(j).cast<double>();
     y -= ratio * data_.observed[j].cast<double>().matrix();
-    variance += ratio * ratio * variance_[j].cast<double>().matrix();
+    variance += ratio * ratio * data_.noise[j].cast<double>().matrix();
   }
   weight = variance.cwiseInverse();
 }
@@ -496,7 +372,7 @@ constexpr double kCauchy = 2.385;
 // turns rough at the 1e-4 level and the search stops in a spurious minimum (measured: R0
 // off by 2.6e-4, Rd by 0.0026 on three 512x512 views; with the floor 1e-6 and 1.5e-4
 // of the level). Real noise (1-9% of the level at 256 spp) is far above it.
-constexpr double kMinimumScale = 1e-3 / CrossViewSystem::kNoiseFloor;
+constexpr double kMinimumScale = 1e-3 / kNoiseFloor;
 
 // Noise-free, band-limited captures: the Cauchy fit's d is trimmed by kTrimmings more solves with
 // Welsch's weight exp(-(e / (kTrim scale))^2), which keeps the pairs that fit to about the

@@ -58,6 +58,7 @@
 #pragma once
 
 #include "inverse/lighting_fit.h"
+#include "inverse/noise_model.h"
 #include "inverse/samples.h"
 
 #include <Eigen/Dense>
@@ -76,17 +77,13 @@ class CrossViewSystem {
  public:
   // Pairs every sample with each other view that reflects its direction; `samples` must be
   // pixel samples (the pixel grid is the interpolation mesh). Throws glaze::Error when no
-  // two views see a common direction. The pairs' noise model is estimated from the
-  // captures' pixel-to-pixel residuals (cross_view.cpp), or for `noise_free` captures a
-  // fixed fraction of each pixel's level; `noise_free` captures also keep every pair's
+  // two views see a common direction. The pairs' noise is the captures' (data.noise,
+  // noise_model.h), which must be set; `noise_free` captures keep every pair's
   // quadratic on 3 x 3 pixels (nothing to average: see above). `trim`: the diffuse field
   // is trimmed (cross_view.cpp), for captures that the model fits up to the
   // interpolation's error: noise-free, with a band-limited diffuse term.
   CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free, bool trim);
 
-  // The noise model's floor, relative to a sample's level, and noise-free captures' whole
-  // model: residuals that small are the pixel grids' interpolation error, not noise.
-  static constexpr double kNoiseFloor = 0.005;
   ~CrossViewSystem();
 
   // The robust misfit at R0 (Cauchy loss of the pair residuals, each divided by its
@@ -149,7 +146,7 @@ class CrossViewSystem {
   // The quadratic's weights on the (2 reach + 1)^2 pixels around `corner` (the other
   // view's sample nearest r), written to `s`; false, leaving `s` as it is, where too few
   // exist, their quadratic is ill-conditioned, or (reach 2) it misfits them by more than
-  // their noise (the noise model, variance_, must be set).
+  // their noise (data.noise).
   bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples, const std::vector<std::array<Vec3, 2>>& steps,
                          uint32_t sample, uint32_t corner, int reach, Stencil& s) const;
   // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
@@ -181,11 +178,11 @@ class CrossViewSystem {
 
   const LightingData& data_;
   int n_;
-  std::vector<ReflectedMesh> meshes_;
+  std::vector<PixelGrid> grids_;       // per view
+  std::vector<ReflectedMesh> meshes_;  // per view, on its grid
   std::vector<Pair> pairs_;
   std::vector<uint32_t> members_;
   std::vector<float> weights_;
-  std::vector<RGB> variance_;    // per sample and channel: the noise model
   bool trim_;
   double scale_ = INFINITY;      // robust scale of the normalised residuals
   size_t stride_ = 1;

@@ -7,9 +7,10 @@
 //    ridge term (documented below) for views that leave it ill-posed.
 // 2. The high-resolution part: subtract the predicted diffuse term from each observation,
 //    divide by F(n.v), and splat the result into a lat-long map along the reflected
-//    direction, weighted by F^2 (the mirror's share of the signal: the division amplifies
-//    noise by 1/F). Texels no sample reaches take the SH reconstruction and are marked
-//    uncovered.
+//    direction. Each texel weights its samples by their reliability: the captures' noise
+//    amplified by 1/F, and the lighting's own variation within the texel, which every
+//    sample shares (a random-effects mean, lighting_fit.cpp). Texels no sample reaches
+//    take the SH reconstruction and are marked uncovered.
 //
 // Everything material-independent is gathered in one pass (LightingData): the normal
 // equations for any (R0, Rd) are then assembled from moments in O(lmax^4), which the
@@ -57,6 +58,9 @@ struct LightingData {
   std::vector<Vec3> reflected;
   std::vector<float> mu;
   std::vector<RGB> observed;
+  // Per sample and channel: the variance of the captured observation's noise
+  // (noise_model.h), which take_off_diffuse_bands leaves as it is.
+  std::vector<RGB> noise;
   std::vector<int> frame;
   // Fraction of a 32 x 16 lat-long grid of normal directions that samples cover.
   double normal_coverage = 0.0;
@@ -84,9 +88,10 @@ struct DiffuseBandsAbove {
 };
 
 // The samples' model rows at lmax, each pixel modelled by footprint x footprint rays
-// (footprint.h), and their moments.
+// (footprint.h), their moments, and the observations' noise (estimate_noise; for
+// `noise_free` captures its floor).
 LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint);
+                                  int footprint, bool noise_free);
 
 // Replaces the observations of `data` (gathered from these samples) by the captured ones
 // less the diffuse radiance of the bands `above`, so that what remains is what the fit's

@@ -192,7 +192,7 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
   const int footprint = captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
-    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/true);
     benchmark::DoNotOptimize(
         fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
@@ -219,7 +219,7 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   const int footprint = captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
-    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint);
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, joint.noise_free);
     benchmark::DoNotOptimize(fit_joint_full_band(data, set, 16, options, joint));
   }
 }

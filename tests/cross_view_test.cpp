@@ -49,13 +49,14 @@ double relative_rms_at_truth(bool noise_free) {
   const Scene object = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   const RayTracer tracer(object);
   const SampleSet samples = collect_samples(captures, tracer, object, {});
-  LightingData data = gather_lighting_data(samples, captures, tracer, 4, 1);
+  LightingData data = gather_lighting_data(samples, captures, tracer, 4, 1, noise_free);
   for (size_t k = 0; k < data.observed.size(); ++k)
     data.observed[k] = RGB::Constant(float(schlick_fresnel(kR0, double(data.mu[k])) * smooth_lighting(data.reflected[k])));
+  data.noise = estimate_noise(data.observed, samples, noise_free);  // of what is now observed
   const CrossViewSystem cross(data, samples, noise_free, /*trim=*/false);  // uncalibrated: least squares
   EXPECT_GT(cross.pair_count(), 10000u);
   const CrossViewSystem::Fit at = cross.fit(kR0);
-  const double rms = CrossViewSystem::kNoiseFloor * std::sqrt(at.cost / double(cross.pair_count()));
+  const double rms = kNoiseFloor * std::sqrt(at.cost / double(cross.pair_count()));
   std::printf("pairs %zu, relative rms residual at the true R0 %.3g\n", cross.pair_count(), rms);
   // The diffuse field found is none (it is in units of the lighting, about 1).
   EXPECT_LT(at.d.cwiseAbs().maxCoeff(), 1e-3);

@@ -193,8 +193,12 @@ TEST(InvertFitLighting, ProceduralRooms) {
   }
 }
 
+// St Fagans' windows and lamps are smaller than the samples' spacing: with the samples
+// weighted by F^2 alone (the grazing view deciding each texel it reaches) its map was
+// 5.4% and 5.6% off at 64x32; weighted by their reliability (lighting_fit.cpp, the
+// splat), measured 2.4% for both spheres.
 TEST(InvertFitLighting, RealMaps) {
-  for (const char* name : {"lebombo_1k.hdr", "potsdamer_platz_1k.hdr"}) {
+  for (const char* name : {"lebombo_1k.hdr", "potsdamer_platz_1k.hdr", "st_fagans_interior_1k.hdr"}) {
     GLAZE_REQUIRE_ENVMAP(map, name);
     TemporaryDirectory dir;
     for (const char* scene : {"red_sphere_office.gltf", "white_sphere_office.gltf"}) {
@@ -457,10 +461,10 @@ TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
 // (joint_fit.h): the bands are predicted from the pass before's Rd, so each pass takes
 // back about nine tenths of Rd's error. Red sphere in the blue room, noise-free full-band
 // captures (sh at lmax 16, pixels of 4 x 4 rays, three views at 256 x 256). Measured (red
-// channel's Rd): -0.069 after the first pass, -0.0033 after the second (which moved R0
-// by 0.00001), then +0.0020 and +0.0026 in two passes at that R0. Asserted: the noise-free
-// bounds (0.001, 0.003, 3%), which two passes miss in Rd (narrowly); stopped there (--max-passes 2)
-// the fit says that its passes had not settled, although R0 had.
+// channel's Rd): -0.069 after the first pass, -0.0027 after the second (which moved R0
+// by 0.00001), then +0.0023 and +0.0027 in two passes at that R0. Asserted: the noise-free
+// bounds (0.001, 0.003, 3%); stopped at two passes (--max-passes 2), whose second moved Rd
+// by 0.066, the fit says that its passes had not settled, although R0 had.
 TEST(InvertFitJoint, PassesGoOnUntilRdSettles) {
   TemporaryDirectory dir;
   const std::string folder =
@@ -469,7 +473,6 @@ TEST(InvertFitJoint, PassesGoOnUntilRdSettles) {
   const nlohmann::json stopped = fit_stopped_at_two_passes(dir, folder);
   EXPECT_LT(stopped["last_pass_R0_step"].get<double>(), 1e-3);
   EXPECT_GT(stopped["last_pass_Rd_step"].get<double>(), 0.01);
-  EXPECT_GT(std::abs(stopped["Rd"][0].get<double>() - stopped["reference_material"]["Rd"][0].get<double>()), 0.003);
   expect_settled_joint_fit(fit(dir, folder, "--mode joint"), 0.003);
 }
 
@@ -551,9 +554,9 @@ TEST(InvertFitJoint, PathTracedStudioLampsAreNotNoise) {
 // The same for --mode lighting (lighting_fit.h, fit_lighting_full_band), on the same
 // kind of captures. Measured, L_lm (l <= 2) error in % of L00 and the map's relative
 // RMSE at 64x32: white sphere in the blue room, one fit (--diffuse-lmax 0) 0.93% and
-// 1.9%, two 0.15% and 1.0%; red sphere in the office 0.82% and 2.4% either way (its
-// error is in the green and blue channels, where Rd is ~0 and the bands carry nothing).
-// A second fit that did nothing would fail the white sphere's 0.4%.
+// 2.4%, two 0.13% and 0.49%; red sphere in the office 0.82% either way (its error is in
+// the green and blue channels, where Rd is ~0 and the bands carry nothing), the map
+// 2.3% and 1.5%. A second fit that did nothing would fail the white sphere's 0.4%.
 TEST(InvertFitLighting, FullBandDiffuseIsModelledByASecondFit) {
   TemporaryDirectory dir;
   for (const auto& [scene, bound] : {std::pair("white_sphere_blue_room.gltf", 0.004), std::pair("red_sphere_office.gltf", 0.012)}) {

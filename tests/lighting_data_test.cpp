@@ -75,8 +75,9 @@ TEST(LightingData, TakingOffTheBandsAboveLmaxGivesTheBandLimitedCaptures) {
     const Captured full = capture(full_folder, points), limited = capture(limited_folder, points);
     ASSERT_EQ(full.samples.samples.size(), limited.samples.samples.size());
     const RayTracer full_tracer(full.object), limited_tracer(limited.object);
-    LightingData data = gather_lighting_data(full.samples, full.captures, full_tracer, 4, 1);
-    const LightingData expected = gather_lighting_data(limited.samples, limited.captures, limited_tracer, 4, 1);
+    LightingData data = gather_lighting_data(full.samples, full.captures, full_tracer, 4, 1, /*noise_free=*/true);
+    const LightingData expected =
+        gather_lighting_data(limited.samples, limited.captures, limited_tracer, 4, 1, /*noise_free=*/true);
     // The bands are not negligible: the captures differ by over 1% (relative RMS) before.
     const double before = relative_difference(data.observed, expected.observed);
     EXPECT_GT(before, 0.01);
@@ -103,7 +104,7 @@ TEST(LightingData, TapsAreWhatTheDiffuseRowsWereFormedFrom) {
   TemporaryDirectory dir;
   const Captured points = capture(render(dir, 4), 2000);
   const RayTracer tracer(points.object);
-  const LightingData data = gather_lighting_data(points.samples, points.captures, tracer, 4, 4);
+  const LightingData data = gather_lighting_data(points.samples, points.captures, tracer, 4, 4, /*noise_free=*/true);
   const size_t count = points.samples.samples.size();
   ASSERT_EQ(data.first_tap.size(), count + 1);
   EXPECT_GT(data.first_tap.back(), 3 * count);  // most points blend four pixels
@@ -127,7 +128,7 @@ TEST(LightingData, BandsAreNotTakenOffDataOfOtherSamples) {
   TemporaryDirectory dir;
   const Captured full = capture(render(dir, 16), 0);
   const RayTracer tracer(full.object);
-  LightingData data = gather_lighting_data(full.samples, full.captures, tracer, 4, 1);
+  LightingData data = gather_lighting_data(full.samples, full.captures, tracer, 4, 1, /*noise_free=*/true);
   SampleSet fewer = full.samples;
   fewer.samples.pop_back();
   const std::vector<RGB> observed = data.observed;

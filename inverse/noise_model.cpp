@@ -1,0 +1,149 @@
+// noise_model.cpp: the captures' noise per sample, from the pixels' residuals.
+#include "inverse/noise_model.h"
+
+#include "renderer/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+
+namespace glaze {
+namespace {
+
+// The window whose residuals estimate a sample's noise: (2 kNoiseReach + 1)^2 pixels less
+// the 3 x 3 around the sample, widened (doubled) while it holds fewer than kNoiseValues.
+constexpr int kNoiseReach = 4;
+constexpr size_t kNoiseValues = 8;
+
+// The median of e^2 / var(e) for Gaussian e (of a chi-square variable with one degree of
+// freedom): the window's median residual over this is the noise's variance.
+constexpr double kMedianOfChiSquare1 = 0.45493642311957;
+
+// Per sample and channel, the variance of the captures' noise around it, estimated from
+// the data. A pixel's noise is what its neighbours do not predict: the residual
+//   e = o - (sum of the 4 edge neighbours) / 2 + (sum of the 4 corner neighbours) / 4
+// vanishes for any cubic in the film's coordinates, so smooth shading and the mirrored
+// lighting's gradients and curvature leave it, and for independent pixel noise of
+// variance v it has variance (1 + 4/4 + 4/16) v = 2.25 v. The median of e^2 / 2.25 over
+// the window around the sample, divided by kMedianOfChiSquare1, is its noise variance; the
+// window leaves out the sample and its 8 neighbours, whose residuals contain the sample's
+// own noise, so that a sample's noise does not set its weight. With a floor of
+// kNoiseFloor times the level (the four neighbours' mean, plus 1% of the
+// mean observation).
+//
+// The median, not the mean: where the lighting has detail the pixels do not resolve (a
+// small lamp's reflection, a window's edge) e is that detail, large in a few pixels of
+// the window, and the mean counts it as noise. The pairs there then carry a variance that
+// makes their misfit (the interpolation's, not the noise's) look like noise, and the
+// robust loss keeps them; with the median they stay outliers, and the 5 x 5 stencils'
+// test of fit (quadratic_weights) sees the detail. Measured on path-traced captures of
+// the white sphere under studio_small_03 (256 spp, 256 x 256, seeds 0-2), R0 +0.017,
+// +0.013, +0.021 with the mean; +0.0070, +0.0048, +0.0082 with the median; +0.0033,
+// +0.0022, +0.0038 with the test of fit as well (README, "Small lamps, path-traced").
+//
+// Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
+// is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp
+// captures of the white sphere in the blue room, it is 4% of the level near the normal and
+// 1.5% at n.v = 0.2-0.3, where the mirror carries much of the level; weighting by the
+// level instead (glaze's first model) misweighs the grazing pairs that fix R0, and
+// the joint fit ends at R0 0.009 instead of 0.0385, for every seed. Photographs' noise
+// (shot and read noise) is not proportional to the level either.
+//
+// `noise_free` captures (glaze's sh integrator, which is deterministic) take the floor
+// everywhere. Their residuals e are the signal's detail, not noise: in a channel that
+// only the mirror lights (the red sphere's green and blue) they are the reflected map's
+// texture, 4-9% of the level under St Fagans at one ray per pixel, which would
+// down-weight the detailed pairs for noise they do not have.
+}  // namespace
+
+PixelGrid::PixelGrid(const SampleSet& set, const std::vector<uint32_t>& members) {
+  if (members.empty()) return;  // a view that does not see the object
+  int x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN, y1 = INT32_MIN;
+  for (uint32_t k : members) {
+    const Vec2& film = set.samples[k].film;
+    x0 = std::min(x0, int(film.x())), y0 = std::min(y0, int(film.y()));
+    x1 = std::max(x1, int(film.x())), y1 = std::max(y1, int(film.y()));
+  }
+  x0_ = x0, y0_ = y0, width_ = x1 - x0 + 1, height_ = y1 - y0 + 1;
+  grid_.assign(size_t(width_) * height_, -1);
+  for (uint32_t k : members) {
+    const Vec2& film = set.samples[k].film;
+    grid_[size_t(int(film.y()) - y0) * width_ + (int(film.x()) - x0)] = k;
+  }
+}
+
+std::vector<PixelGrid> pixel_grids(const SampleSet& samples) {
+  const int views = int(samples.per_frame.size());
+  std::vector<std::vector<uint32_t>> members(views);
+  for (uint32_t k = 0; k < samples.samples.size(); ++k) members[samples.samples[k].frame].push_back(k);
+  std::vector<PixelGrid> grids;
+  grids.reserve(views);
+  for (int f = 0; f < views; ++f) grids.emplace_back(samples, members[f]);
+  return grids;
+}
+
+std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSet& samples, bool noise_free) {
+  const size_t count = samples.samples.size();
+  if (observed.size() != count) throw Error("the noise model needs one observation per sample");
+  // Point samples are read between pixels: they have no grid, and take the floor.
+  noise_free = noise_free || !samples.pixels;
+  const std::vector<PixelGrid> grids = samples.pixels ? pixel_grids(samples) : std::vector<PixelGrid>{};
+  auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
+  std::vector<RGBd> residual(count, RGBd::Constant(-1.0));  // e^2 / 2.25; -1: a neighbour is missing
+  if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    const PixelGrid& grid = grids[samples.samples[k].frame];
+    const auto [i, j] = pixel_of(k);
+    RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        if (di == 0 && dj == 0) continue;
+        const int64_t m = grid.sample_at(i + di, j + dj);
+        if (m < 0) return;
+        (di == 0 || dj == 0 ? edges : corners) += observed[m].cast<double>();
+      }
+    residual[k] = (observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25;
+  });
+  RGBd mean = RGBd::Zero();
+  for (const RGB& o : observed) mean += o.cast<double>();
+  const RGBd offset = (0.01 * mean / double(count)).max(1e-12);
+  std::vector<RGB> variance(count);
+  tbb::parallel_for(size_t(0), count, [&](size_t k) {
+    RGBd level = RGBd::Zero();
+    int neighbours = 0;
+    std::array<std::vector<double>, 3> values;
+    if (samples.pixels) {
+      const PixelGrid& grid = grids[samples.samples[k].frame];
+      grid.for_each_neighbour(samples.samples[k].film, [&](uint32_t m) {
+        level += observed[m].cast<double>();
+        ++neighbours;
+      });
+      const auto [i, j] = pixel_of(k);
+      if (!noise_free)
+        for (auto& v : values) v.reserve(size_t(2 * kNoiseReach + 1) * size_t(2 * kNoiseReach + 1));
+      for (int reach = kNoiseReach; !noise_free && values[0].size() < kNoiseValues && reach <= 4 * kNoiseReach; reach *= 2) {
+        for (auto& v : values) v.clear();
+        for (int dj = -reach; dj <= reach; ++dj)
+          for (int di = -reach; di <= reach; ++di)
+            if (std::max(std::abs(di), std::abs(dj)) > 1)
+              if (const int64_t m = grid.sample_at(i + di, j + dj); m >= 0 && residual[m][0] >= 0.0)
+                for (int c = 0; c < 3; ++c) values[c].push_back(residual[m][c]);
+      }
+    }
+    level = neighbours > 0 ? RGBd(level / neighbours) : observed[k].cast<double>();
+    const RGBd floor = (kNoiseFloor * (level.abs() + offset)).square();
+    RGBd estimate = floor;
+    if (!values[0].empty())
+      for (int c = 0; c < 3; ++c) {
+        std::vector<double>& v = values[c];
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        estimate[c] = std::max(v[v.size() / 2] / kMedianOfChiSquare1, floor[c]);
+      }
+    variance[k] = estimate.cast<float>();
+  });
+  return variance;
+}
+
+}  // namespace glaze
