@@ -419,19 +419,27 @@ constexpr double kBetweenSamples = 3.0 * kPiD / 180.0;
 
 // The splat's sums per texel (the samples' weighted estimates, their weights per channel,
 // and their mirror weight F^2), kept as prefix sums along each row, so that the sum over
-// any run of a row's texels costs two lookups whatever the map's resolution.
+// any run of a row's texels costs two lookups whatever the map's resolution. Filled in
+// two steps: each texel's own sums (set), then the rows' prefix sums (sum_rows), in place.
 class SplatRows {
  public:
-  SplatRows(const std::vector<RGBd>& sum, const std::vector<RGBd>& weight, const std::vector<double>& mirror_weight,
-            int width, int height)
+  SplatRows(int width, int height)
       : width_(width), height_(height), sum_(size_t(width + 1) * height, RGBd::Zero()), weight_(sum_),
-        mirror_weight_(sum_.size(), 0.0) {
-    tbb::parallel_for(0, height, [&](int j) {
-      const size_t row = size_t(j) * (width + 1), texel = size_t(j) * width;
-      for (int i = 0; i < width; ++i) {
-        sum_[row + i + 1] = sum_[row + i] + sum[texel + i];
-        weight_[row + i + 1] = weight_[row + i] + weight[texel + i];
-        mirror_weight_[row + i + 1] = mirror_weight_[row + i] + mirror_weight[texel + i];
+        mirror_weight_(sum_.size(), 0.0) {}
+
+  // Texel t's own sums (t = j width + i; each texel once, before sum_rows).
+  void set(size_t t, const RGBd& sum, const RGBd& weight, double mirror_weight) {
+    const size_t slot = t + t / width_ + 1;  // row j holds width + 1 prefix sums
+    sum_[slot] = sum, weight_[slot] = weight, mirror_weight_[slot] = mirror_weight;
+  }
+
+  void sum_rows() {
+    tbb::parallel_for(0, height_, [&](int j) {
+      const size_t row = size_t(j) * (width_ + 1);
+      for (int i = 0; i < width_; ++i) {
+        sum_[row + i + 1] += sum_[row + i];
+        weight_[row + i + 1] += weight_[row + i];
+        mirror_weight_[row + i + 1] += mirror_weight_[row + i];
       }
     });
   }
@@ -533,44 +541,58 @@ class SplatRows {
 SplatRows splat_samples(const LightingData& data, float R0, const std::vector<RGBd>& mirror,
                         const std::vector<size_t>& texel_of_sample, int width, int height) {
   const size_t count = mirror.size(), texels = size_t(width) * height;
-  std::vector<double> fresnel(count);
-  tbb::parallel_for(size_t(0), count, [&](size_t k) { fresnel[k] = schlick_fresnel(double(R0), double(data.mu[k])); });
-  // Visits the samples that see a mirror (F > 0) in sample order, so that the sums do not
-  // depend on the thread count: visit(k, texel, F).
-  auto for_each_mirror = [&](auto&& visit) {
-    for (size_t k = 0; k < count; ++k)
-      if (fresnel[k] > 0.0) visit(k, texel_of_sample[k], fresnel[k]);
-  };
-  std::vector<uint32_t> samples(texels, 0);
-  std::vector<RGBd> noise(texels, RGBd::Zero());
-  for_each_mirror([&](size_t k, size_t t, double) { ++samples[t], noise[t] += data.noise[k].cast<double>(); });
+  // The samples by texel, in sample order within each (a counting sort): each texel's
+  // sums are then formed from its own samples, in parallel over texels and whatever the
+  // thread count the same, with per-texel storage only for the sort and the results.
+  std::vector<uint32_t> first(texels + 1, 0);
+  for (size_t k = 0; k < count; ++k) ++first[texel_of_sample[k] + 1];
+  for (size_t t = 0; t < texels; ++t) first[t + 1] += first[t];
+  std::vector<uint32_t> order(count);
+  {
+    std::vector<uint32_t> next(first.begin(), first.end() - 1);
+    for (size_t k = 0; k < count; ++k) order[next[texel_of_sample[k]]++] = uint32_t(k);
+  }
+  SplatRows splat(width, height);
   tbb::parallel_for(size_t(0), texels, [&](size_t t) {
-    if (samples[t] > 0) noise[t] = (noise[t] / samples[t]).max(std::numeric_limits<double>::min());
+    // The texel's samples that see a mirror (F > 0), with their F.
+    thread_local std::vector<std::pair<uint32_t, double>> seen;
+    seen.clear();
+    RGBd noise = RGBd::Zero();
+    for (uint32_t i = first[t]; i < first[t + 1]; ++i) {
+      const uint32_t k = order[i];
+      const double F = schlick_fresnel(double(R0), double(data.mu[k]));
+      if (!(F > 0.0)) continue;
+      seen.emplace_back(k, F);
+      noise += data.noise[k].cast<double>();
+    }
+    if (seen.empty()) return;
+    const double n = double(seen.size());
+    noise = (noise / n).max(std::numeric_limits<double>::min());
+    // The sums of the weights 1 / v_k and of their squares, and their weighted mean.
+    RGBd S1 = RGBd::Zero(), S2 = RGBd::Zero(), mean = RGBd::Zero();
+    for (const auto& [k, F] : seen) {
+      const RGBd w = F * F / noise;
+      S1 += w, S2 += w.square(), mean += w * mirror[k] / F;
+    }
+    mean /= S1;
+    RGBd tau2 = RGBd::Zero();
+    if (seen.size() >= 2) {
+      RGBd Q = RGBd::Zero();
+      for (const auto& [k, F] : seen) Q += (mirror[k] / F - mean).square() * (F * F / noise);
+      const RGBd denominator = S1 - S2 / S1;
+      for (int c = 0; c < 3; ++c)
+        if (denominator[c] > 0.0) tau2[c] = std::max(0.0, (Q[c] - (n - 1.0)) / denominator[c]);
+    }
+    RGBd sum = RGBd::Zero(), weight = RGBd::Zero();
+    double mirror_weight = 0.0;
+    for (const auto& [k, F] : seen) {
+      const RGBd w = (noise / (F * F) + tau2).inverse();
+      sum += w * mirror[k] / F, weight += w, mirror_weight += F * F;
+    }
+    splat.set(t, sum, weight, mirror_weight);
   });
-  // The sums of the weights 1 / v_k and of their squares, and the weighted sum of x_k.
-  std::vector<RGBd> S1(texels, RGBd::Zero()), S2(texels, RGBd::Zero()), mean(texels, RGBd::Zero());
-  for_each_mirror([&](size_t k, size_t t, double F) {
-    const RGBd w = F * F / noise[t];
-    S1[t] += w, S2[t] += w.square(), mean[t] += w * mirror[k] / F;
-  });
-  std::vector<RGBd> Q(texels, RGBd::Zero());
-  for_each_mirror([&](size_t k, size_t t, double F) {
-    Q[t] += (mirror[k] / F - mean[t] / S1[t]).square() * (F * F / noise[t]);
-  });
-  std::vector<RGBd> tau2(texels, RGBd::Zero());
-  tbb::parallel_for(size_t(0), texels, [&](size_t t) {
-    if (samples[t] < 2) return;
-    const RGBd denominator = S1[t] - S2[t] / S1[t];
-    for (int c = 0; c < 3; ++c)
-      if (denominator[c] > 0.0) tau2[t][c] = std::max(0.0, (Q[t][c] - (samples[t] - 1.0)) / denominator[c]);
-  });
-  std::vector<RGBd> sum(texels, RGBd::Zero()), weight(texels, RGBd::Zero());
-  std::vector<double> mirror_weight(texels, 0.0);
-  for_each_mirror([&](size_t k, size_t t, double F) {
-    const RGBd w = (noise[t] / (F * F) + tau2[t]).inverse();
-    sum[t] += w * mirror[k] / F, weight[t] += w, mirror_weight[t] += F * F;
-  });
-  return SplatRows(sum, weight, mirror_weight, width, height);
+  splat.sum_rows();
+  return splat;
 }
 
 }  // namespace
