@@ -67,8 +67,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   const bool band_limited = capture_lmax <= lmax;
   const int diffuse_lmax =
       band_limited ? lmax : std::min(capture_lmax, static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax)));
-  const bool noise_free = noise_free_captures(in.captures);
-  LightingData data = gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint, noise_free);
+  LightingData data =
+      gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint, noise_free_captures(in.captures));
   stage_seconds["gather"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
   const FinishPreview finish_preview{preview};
@@ -89,7 +89,6 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
     joint_options.max_passes = static_cast<int>(args.integer("max-passes", joint_options.max_passes, 1, 100));
     joint_options.band_limited_diffuse = band_limited;
-    joint_options.noise_free = noise_free;
     joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
   }
   const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);

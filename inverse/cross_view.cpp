@@ -121,7 +121,7 @@ constexpr double kGoodness = 10.0;
 
 CrossViewSystem::~CrossViewSystem() = default;
 
-CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free, bool trim)
+CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples, bool trim)
     : data_(data), n_(int(data.cc.rows())), trim_(trim) {
   if (!samples.pixels) throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
   const size_t count = samples.samples.size();
@@ -162,7 +162,7 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
         s.count = 3;
         std::copy(corners.begin(), corners.end(), s.member.begin());
         std::copy(weights.begin(), weights.end(), s.weight.begin());
-        interpolate_quadratically(meshes_[f], samples, steps, uint32_t(k), !noise_free, s);
+        interpolate_quadratically(meshes_[f], samples, steps, uint32_t(k), !data.noise_free, s);
         found[k - begin].push_back(s);
       }
     });

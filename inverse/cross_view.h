@@ -78,11 +78,14 @@ class CrossViewSystem {
   // Pairs every sample with each other view that reflects its direction; `samples` must be
   // pixel samples (the pixel grid is the interpolation mesh). Throws glaze::Error when no
   // two views see a common direction. The pairs' noise is the captures' (data.noise,
-  // noise_model.h), which must be set; `noise_free` captures keep every pair's
-  // quadratic on 3 x 3 pixels (nothing to average: see above). `trim`: the diffuse field
-  // is trimmed (cross_view.cpp), for captures that the model fits up to the
-  // interpolation's error: noise-free, with a band-limited diffuse term.
-  CrossViewSystem(const LightingData& data, const SampleSet& samples, bool noise_free, bool trim);
+  // noise_model.h); noise-free captures (data.noise_free) keep every pair's quadratic on
+  // 3 x 3 pixels (nothing to average: see above). `trim`: the diffuse field is trimmed
+  // (cross_view.cpp), for captures that the model fits up to the interpolation's error:
+  // noise-free, with a band-limited diffuse term.
+  CrossViewSystem(const LightingData& data, const SampleSet& samples, bool trim);
+  // The meshes refer to the grids: not copied.
+  CrossViewSystem(const CrossViewSystem&) = delete;
+  CrossViewSystem& operator=(const CrossViewSystem&) = delete;
 
   ~CrossViewSystem();
 

@@ -114,7 +114,7 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
     throw Error("only " + std::to_string(int(100 * several_views)) +
                 "% of the reflected directions are seen from two or more views: material and lighting cannot be "
                 "separated; the joint fit needs views from several directions");
-  return CrossViewSystem(data, samples, joint.noise_free, joint.noise_free && joint.band_limited_diffuse);
+  return CrossViewSystem(data, samples, data.noise_free && joint.band_limited_diffuse);
 }
 
 // The map-consistent solve for the full-band captures' Rd, on the grid turned by

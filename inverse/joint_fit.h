@@ -82,10 +82,6 @@ struct JointFitOptions {
   int max_passes = 12;
   // The captures' diffuse term is band-limited at the fit's lmax (see above).
   bool band_limited_diffuse = false;
-  // The captures carry no noise (glaze's sh integrator is deterministic): the views'
-  // pairs are weighted by their level instead of a noise model estimated from the data,
-  // and compared through 3 x 3 pixels only (cross_view.h).
-  bool noise_free = false;
   // The search for R0 starts there, near enough to skip the coarse grid (clamped to R0's
   // bounds).
   std::optional<double> start_R0;

@@ -138,6 +138,7 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
     data.tap_share_g.insert(data.tap_share_g.end(), chunk_tap_share_g[chunk].begin(), chunk_tap_share_g[chunk].end());
   }
   set_observations(data, std::move(observations), moments);
+  data.noise_free = noise_free;
   data.noise = estimate_noise(data.observed, samples, noise_free);
   data.aa = moments.aa, data.ab = moments.ab, data.ac = moments.ac;
   data.bb = moments.bb, data.bc = moments.bc, data.cc = moments.cc;
@@ -417,20 +418,24 @@ constexpr double kMinMirrorWeight = 1e-4;
 // that near are unseen.
 constexpr double kBetweenSamples = 3.0 * kPiD / 180.0;
 
-// The splat's sums per texel (the samples' weighted estimates, their weights per channel,
-// and their mirror weight F^2), kept as prefix sums along each row, so that the sum over
-// any run of a row's texels costs two lookups whatever the map's resolution. Filled in
-// two steps: each texel's own sums (set), then the rows' prefix sums (sum_rows), in place.
+// The splat's texels: each one's estimate (splat_samples) times its mirror weight (its
+// samples' sum of F^2), and that weight, kept as prefix sums along each row, so that the
+// sum over any run of a row's texels costs two lookups whatever the map's resolution.
+// Texels pooled in a disc (estimate_near) are weighted by their mirror weight, as the
+// samples were before splat_samples; the sums stay within the samples' F^2 (at most 1
+// each) times the lighting, whereas the noise weights span the square of the range of
+// the pixels' levels. Filled in two steps: each texel's own values (set), then the rows'
+// prefix sums (sum_rows), in place.
 class SplatRows {
  public:
   SplatRows(int width, int height)
-      : width_(width), height_(height), sum_(size_t(width + 1) * height, RGBd::Zero()), weight_(sum_),
+      : width_(width), height_(height), sum_(size_t(width + 1) * height, RGBd::Zero()),
         mirror_weight_(sum_.size(), 0.0) {}
 
-  // Texel t's own sums (t = j width + i; each texel once, before sum_rows).
-  void set(size_t t, const RGBd& sum, const RGBd& weight, double mirror_weight) {
+  // Texel t's estimate and mirror weight (t = j width + i; each texel once, before sum_rows).
+  void set(size_t t, const RGBd& estimate, double mirror_weight) {
     const size_t slot = t + t / width_ + 1;  // row j holds width + 1 prefix sums
-    sum_[slot] = sum, weight_[slot] = weight, mirror_weight_[slot] = mirror_weight;
+    sum_[slot] = mirror_weight * estimate, mirror_weight_[slot] = mirror_weight;
   }
 
   void sum_rows() {
@@ -438,7 +443,6 @@ class SplatRows {
       const size_t row = size_t(j) * (width_ + 1);
       for (int i = 0; i < width_; ++i) {
         sum_[row + i + 1] += sum_[row + i];
-        weight_[row + i + 1] += weight_[row + i];
         mirror_weight_[row + i + 1] += mirror_weight_[row + i];
       }
     });
@@ -471,18 +475,17 @@ class SplatRows {
     }
   }
 
-  // Texel (i, j)'s mirror estimate: its samples' weighted mean, else that of the samples
-  // in the smallest of `discs` (discs(j)) whose mirror weight suffices; none when no
-  // disc's does.
+  // Texel (i, j)'s mirror estimate: its own, else the mean of those in the smallest of
+  // `discs` (discs(j)) whose mirror weight suffices; none when no disc's does.
   std::optional<RGBd> estimate_near(int i, int j, const std::vector<std::vector<Run>>& discs) const {
-    RGBd s = RGBd::Zero(), w = RGBd::Zero();
-    double mirror = 0.0;
-    add_run(j, i, 1, s, w, mirror);
-    if (mirror >= kMinMirrorWeight) return RGBd(s / w);
+    RGBd s = RGBd::Zero();
+    double w = 0.0;
+    add_run(j, i, 1, s, w);
+    if (w >= kMinMirrorWeight) return RGBd(s / w);
     for (const std::vector<Run>& disc : discs) {
-      s = RGBd::Zero(), w = RGBd::Zero(), mirror = 0.0;
-      for (const Run& run : disc) add_run(run.row, i - run.columns, std::min(2 * run.columns + 1, width_), s, w, mirror);
-      if (mirror >= kMinMirrorWeight) return RGBd(s / w);
+      s = RGBd::Zero(), w = 0.0;
+      for (const Run& run : disc) add_run(run.row, i - run.columns, std::min(2 * run.columns + 1, width_), s, w);
+      if (w >= kMinMirrorWeight) return RGBd(s / w);
     }
     return std::nullopt;
   }
@@ -490,14 +493,13 @@ class SplatRows {
  private:
   // Adds the sums over `count` (<= width) texels of row y from column `first` on,
   // wrapping around.
-  void add_run(int y, int first, int count, RGBd& s, RGBd& w, double& mirror) const {
+  void add_run(int y, int first, int count, RGBd& s, double& w) const {
     first = ((first % width_) + width_) % width_;
     const size_t row = size_t(y) * (width_ + 1);
     const int end = first + count;
     auto add = [&](int from, int to) {
       s += sum_[row + to] - sum_[row + from];
-      w += weight_[row + to] - weight_[row + from];
-      mirror += mirror_weight_[row + to] - mirror_weight_[row + from];
+      w += mirror_weight_[row + to] - mirror_weight_[row + from];
     };
     if (end <= width_) {
       add(first, end);
@@ -509,8 +511,7 @@ class SplatRows {
 
   int width_, height_;
   std::vector<RGBd> sum_;              // per row, width + 1 prefix sums
-  std::vector<RGBd> weight_;           // the same for the weights
-  std::vector<double> mirror_weight_;  // and for the mirror weights
+  std::vector<double> mirror_weight_;  // the same for the mirror weights
 };
 
 // The splat: sample k estimates the lighting along its mirror direction r_k by
@@ -530,7 +531,7 @@ class SplatRows {
 // mirror's directions spread fastest near the silhouette), so that a texel's share of a
 // source smaller than their spacing was decided by a few samples, hit or missed. Measured
 // on noise-free captures (512 x 512, three views, the map box-filtered to 64 x 32):
-// St Fagans 5.4% -> 2.4%, Grace Cathedral 7.6% -> 3.2% (README, "Maps whose sources are
+// St Fagans 5.4% -> 2.4%, Grace Cathedral 7.6% -> 3.0% (README, "Maps whose sources are
 // smaller than the output map's texels").
 //
 // `noise` is the mean over the texel's samples of the captures' noise model, not each
@@ -538,6 +539,11 @@ class SplatRows {
 // channel that only the mirror lights is the lighting itself, so that a sample's own
 // would weigh a small source's samples down against the dark ones around it (measured:
 // the red sphere under St Fagans, noise-free, 7.8% instead of 2.4%, its blue channel 13%).
+// tau^2 takes whatever the noise model leaves out: on point samples, which have no pixel
+// grid to estimate the noise on (noise_model.h), the captures' noise, so that their
+// weights tend to equal ones; and the diffuse model's error divided by F, which pulls the
+// weights towards equal ones where F is small, as in a one-fit map of full-band captures
+// (lighting_fit.h: the second fit takes the bands off).
 SplatRows splat_samples(const LightingData& data, float R0, const std::vector<RGBd>& mirror,
                         const std::vector<size_t>& texel_of_sample, int width, int height) {
   const size_t count = mirror.size(), texels = size_t(width) * height;
@@ -589,7 +595,8 @@ SplatRows splat_samples(const LightingData& data, float R0, const std::vector<RG
       const RGBd w = (noise / (F * F) + tau2).inverse();
       sum += w * mirror[k] / F, weight += w, mirror_weight += F * F;
     }
-    splat.set(t, sum, weight, mirror_weight);
+    // Left unset (to the discs or the SH reconstruction) where the noise overflows.
+    if (const RGBd estimate = sum / weight; estimate.allFinite()) splat.set(t, estimate, mirror_weight);
   });
   splat.sum_rows();
   return splat;

@@ -59,8 +59,10 @@ struct LightingData {
   std::vector<float> mu;
   std::vector<RGB> observed;
   // Per sample and channel: the variance of the captured observation's noise
-  // (noise_model.h), which take_off_diffuse_bands leaves as it is.
+  // (noise_model.h), which take_off_diffuse_bands leaves as it is; for `noise_free`
+  // captures (glaze's sh integrator is deterministic) the model's floor alone.
   std::vector<RGB> noise;
+  bool noise_free = false;
   std::vector<int> frame;
   // Fraction of a 32 x 16 lat-long grid of normal directions that samples cover.
   double normal_coverage = 0.0;

@@ -192,7 +192,8 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
   const int footprint = captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
-    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/true);
+    // The second fit's captures, as photographs, with the data-driven noise model.
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/diffuse_lmax <= 4);
     benchmark::DoNotOptimize(
         fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
@@ -215,11 +216,12 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   LightingFitOptions options;
   JointFitOptions joint;
   joint.band_limited_diffuse = band_limited;
-  joint.noise_free = band_limited;  // the other: the data-driven noise model, as for photographs
   const int footprint = captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
-    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, joint.noise_free);
+    // Band-limited: as noise-free captures; the other with the data-driven noise model, as
+    // for photographs.
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/band_limited);
     benchmark::DoNotOptimize(fit_joint_full_band(data, set, 16, options, joint));
   }
 }

@@ -53,7 +53,7 @@ double relative_rms_at_truth(bool noise_free) {
   for (size_t k = 0; k < data.observed.size(); ++k)
     data.observed[k] = RGB::Constant(float(schlick_fresnel(kR0, double(data.mu[k])) * smooth_lighting(data.reflected[k])));
   data.noise = estimate_noise(data.observed, samples, noise_free);  // of what is now observed
-  const CrossViewSystem cross(data, samples, noise_free, /*trim=*/false);  // uncalibrated: least squares
+  const CrossViewSystem cross(data, samples, /*trim=*/false);  // uncalibrated: least squares
   EXPECT_GT(cross.pair_count(), 10000u);
   const CrossViewSystem::Fit at = cross.fit(kR0);
   const double rms = kNoiseFloor * std::sqrt(at.cost / double(cross.pair_count()));

@@ -554,7 +554,7 @@ TEST(InvertFitJoint, PathTracedStudioLampsAreNotNoise) {
 // The same for --mode lighting (lighting_fit.h, fit_lighting_full_band), on the same
 // kind of captures. Measured, L_lm (l <= 2) error in % of L00 and the map's relative
 // RMSE at 64x32: white sphere in the blue room, one fit (--diffuse-lmax 0) 0.93% and
-// 2.4%, two 0.13% and 0.49%; red sphere in the office 0.82% either way (its error is in
+// 2.3%, two 0.13% and 0.49%; red sphere in the office 0.82% either way (its error is in
 // the green and blue channels, where Rd is ~0 and the bands carry nothing), the map
 // 2.3% and 1.5%. A second fit that did nothing would fail the white sphere's 0.4%.
 TEST(InvertFitLighting, FullBandDiffuseIsModelledByASecondFit) {
