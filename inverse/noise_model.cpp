@@ -132,7 +132,8 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
   // Per view, the residuals e^2 / 2.25 on its pixel box (-1: no sample there, or a
   // neighbour missing), so that a window's are read row by row.
   std::vector<std::vector<RGBd>> residual(grids.size());
-  for (size_t f = 0; f < grids.size(); ++f) residual[f].assign(size_t(grids[f].width()) * grids[f].height(), RGBd::Constant(-1.0));
+  for (size_t f = 0; f < grids.size(); ++f)
+    residual[f].assign(size_t(grids[f].width()) * grids[f].height(), RGBd::Constant(-1.0));
   auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
   if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const PixelGrid& grid = grids[samples.samples[k].frame];
