@@ -116,7 +116,6 @@ namespace {
 // +0.0025 on seeds 0 and 1, against +0.0037 and +0.0018 at 10).
 constexpr double kGoodness = 10.0;
 
-
 }  // namespace
 
 CrossViewSystem::~CrossViewSystem() = default;

@@ -141,8 +141,8 @@ class CrossViewSystem {
   // pixels around the corner nearest r (with `average_noise`, where the other view sees r
   // nearer its normal than `sample` does and the quadratic fits them: see above), else or
   // where that fails on the 3 x 3; leaves it as it is where too few pixels exist or their
-  // quadratic is ill-conditioned. `steps`: per sample, the change of its reflected direction per pixel
-  // along the film's x and y.
+  // quadratic is ill-conditioned. `steps`: per sample, the change of its reflected
+  // direction per pixel along the film's x and y.
   void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                  const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool average_noise,
                                  Stencil& s) const;

@@ -25,8 +25,8 @@ constexpr double kMedianOfChiSquare1 = 0.45493642311957;
 
 // The median (the element of rank n / 2) of v[0 .. n - 1], exactly. `guess`, a value
 // likely near it (the last window's median: neighbouring windows share most of their
-// pixels), splits v first, without branches; the median is then a few ranks from the split on one side,
-// found there by as many passes for the least (or greatest) value. Selection on all of v
+// pixels), splits v first, without branches; the median is then a few ranks from the
+// split on one side, found there by as many passes for the least (or greatest) value. Selection on all of v
 // (std::nth_element) mispredicts about half its branches on 72 values in random order,
 // and was about all of the noise model's time (0.68 s of 0.70 s for three 512 x 512
 // path-traced views; 0.25 s in all with this). Ranks under kLinearRanks from the split
@@ -130,10 +130,11 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
   noise_free = noise_free || !samples.pixels;
   const std::vector<PixelGrid> grids = samples.pixels ? pixel_grids(samples) : std::vector<PixelGrid>{};
   // Per view, the residuals e^2 / 2.25 on its pixel box (-1: no sample there, or a
-  // neighbour missing), so that a window's are read row by row.
+  // neighbour missing), so that a window's are read row by row; none where unread.
   std::vector<std::vector<RGBd>> residual(grids.size());
-  for (size_t f = 0; f < grids.size(); ++f)
-    residual[f].assign(size_t(grids[f].width()) * grids[f].height(), RGBd::Constant(-1.0));
+  if (!noise_free)
+    for (size_t f = 0; f < grids.size(); ++f)
+      residual[f].assign(size_t(grids[f].width()) * grids[f].height(), RGBd::Constant(-1.0));
   auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
   if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const PixelGrid& grid = grids[samples.samples[k].frame];
