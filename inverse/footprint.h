@@ -28,7 +28,8 @@ void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& 
                           int footprint, PixelVisit&& pixel) {
   const Sample& s = samples.samples[k];
   const PinholeCamera& camera = captures.frames[s.frame].camera;
-  std::vector<FootprintRay> rays;
+  // Per thread, its room reused (not allocated per sample).
+  thread_local std::vector<FootprintRay> rays;
   // centre: the hit through the pixel centre when the caller has it (a pixel sample).
   auto visit = [&](int px, int py, float weight, std::optional<SurfaceHit> centre) {
     if (weight == 0.0f) return;

@@ -180,13 +180,17 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
   std::vector<RGB> observations(count);
   const Moments moments = sum_moments(count, n, true, [&](size_t first, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
                                                           Eigen::MatrixXd& C, Eigen::MatrixXd& O) {
+    // E_above at the chunk's taps, all at once (SIMD lanes of normals).
+    const size_t first_tap = data.first_tap[first], taps = data.first_tap[first + size_t(O.rows())] - first_tap;
+    std::vector<RGB> E_tap(above_sum ? taps : 0);
+    if (above_sum) (*above_sum)(std::span(data.tap_normal).subspan(first_tap, taps), E_tap);
     for (Eigen::Index r = 0; r < O.rows(); ++r) {
       const size_t k = first + size_t(r);
       A.col(r) = data.a_row(k).cast<double>(), B.col(r) = data.b_row(k).cast<double>(), C.col(r) = data.c_row(k).cast<double>();
       // sum share_g E_above(normal) over the taps: the bands' share of the diffuse rows.
       RGBd E_above = RGBd::Zero();
       for (size_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
-        E_above += double(data.tap_share_g[tap]) * (*above_sum)(data.tap_normal[tap]).cast<double>();
+        E_above += double(data.tap_share_g[tap]) * E_tap[tap - first_tap].cast<double>();
       const RGB observed = (samples.samples[k].observed.cast<double>() - above.per_lighting * E_above).cast<float>();
       O.row(r) = observed.cast<double>().matrix().transpose();
       observations[k] = observed;

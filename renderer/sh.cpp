@@ -1,6 +1,7 @@
 #include "renderer/sh.h"
 
 #include <array>
+#include <experimental/simd>
 
 #include "renderer/error.h"
 #include "renderer/material.h"
@@ -306,16 +307,55 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
   return result;
 }
 
-RGB ShDiffuseSum::operator()(const Vec3& n) const {
-  // The band limits people use, unrolled at compile time (1.3x to 2x faster than the loop).
-  if (lmax_ <= 4) return sum_low_bands(n);
-  switch (lmax_) {
-    case 6: return sum(std::integral_constant<int, 6>(), n);
-    case 8: return sum(std::integral_constant<int, 8>(), n);
-    case 12: return sum(std::integral_constant<int, 12>(), n);
-    case 16: return sum(std::integral_constant<int, 16>(), n);
-    default: return sum(lmax_, n);
+template <typename Lmax>
+void ShDiffuseSum::sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span<RGB> out) const {
+  using Lanes = std::experimental::native_simd<float>;
+  constexpr size_t kWidth = Lanes::size();
+  const int count = sh_count(lmax);
+  std::vector<Lanes> basis(static_cast<size_t>(count));
+  for (size_t first = 0; first < normals.size(); first += kWidth) {
+    // The normals' coordinates, lane by lane (the last normal repeated past the end).
+    std::array<std::array<float, kWidth>, 3> xyz;
+    for (size_t lane = 0; lane < kWidth; ++lane)
+      for (int axis = 0; axis < 3; ++axis) xyz[axis][lane] = normals[std::min(first + lane, normals.size() - 1)][axis];
+    auto coordinate = [&](int axis) { return Lanes(xyz[axis].data(), std::experimental::element_aligned); };
+    for_each_sh(lmax, coordinate(0), coordinate(1), coordinate(2), [&](int i, const Lanes& y) { basis[i] = y; });
+    for (int c = 0; c < 3; ++c) {
+      // Two running sums, so that each multiply-add does not wait on the one before.
+      const float* weights = &weighted_[size_t(c) * count];
+      Lanes even(0.0f), odd(0.0f);
+      int i = 0;
+      for (; i + 1 < count; i += 2) even += weights[i] * basis[i], odd += weights[i + 1] * basis[i + 1];
+      if (i < count) even += weights[i] * basis[i];
+      const Lanes total = even + odd;
+      for (size_t lane = 0; lane < kWidth && first + lane < normals.size(); ++lane) out[first + lane][c] = total[lane];
+    }
   }
+}
+
+template <typename Sum>
+decltype(auto) ShDiffuseSum::with_band_limit(Sum&& sum) const {
+  switch (lmax_) {
+    case 6: return sum(std::integral_constant<int, 6>());
+    case 8: return sum(std::integral_constant<int, 8>());
+    case 12: return sum(std::integral_constant<int, 12>());
+    case 16: return sum(std::integral_constant<int, 16>());
+    default: return sum(lmax_);
+  }
+}
+
+RGB ShDiffuseSum::operator()(const Vec3& n) const {
+  if (lmax_ <= 4) return sum_low_bands(n);
+  return with_band_limit([&](auto lmax) { return sum(lmax, n); });
+}
+
+void ShDiffuseSum::operator()(std::span<const Vec3> normals, std::span<RGB> out) const {
+  if (out.size() != normals.size()) throw Error("ShDiffuseSum: one result per normal");
+  if (lmax_ <= 4) {
+    for (size_t k = 0; k < normals.size(); ++k) out[k] = sum_low_bands(normals[k]);
+    return;
+  }
+  with_band_limit([&](auto lmax) { sum_lanes(lmax, normals, out); });
 }
 
 }  // namespace glaze

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace glaze {
@@ -31,6 +32,13 @@ struct LegendreTable {
 };
 const LegendreTable& legendre_table();
 void check_lmax(int lmax);
+// A constant of the recurrence as a T: a float or a double, or SIMD lanes of floats
+// (std::experimental::simd, which is not built from a double it would have to round).
+template <typename T>
+T sh_constant(double value) {
+  if constexpr (std::is_floating_point_v<T>) return T(value);
+  else return T(typename T::value_type(value));
+}
 }  // namespace detail
 
 // Calls visit(index, Y_index(d)) for every basis function with l <= lmax, for a unit
@@ -39,15 +47,16 @@ void check_lmax(int lmax);
 // with (x + i y)^m avoids atan2 and square roots and is exact at the poles.
 // `lmax` is an int, or a std::integral_constant when the band limit is known at compile
 // time: the same recurrence then unrolls into straight-line code (ShDiffuseSum's hot path).
+// T is float, double or SIMD lanes of floats (one direction per lane).
 template <typename T, typename Lmax, typename Visit>
 void for_each_sh(Lmax lmax, T x, T y, T z, Visit&& visit) {
   const detail::LegendreTable& table = detail::legendre_table();
-  const T sqrt2 = T(1.4142135623730951);
-  T diagonal = T(0.28209479177387814);  // N_0^0 = 1 / sqrt(4 pi)
+  const T sqrt2 = detail::sh_constant<T>(1.4142135623730951);
+  T diagonal = detail::sh_constant<T>(0.28209479177387814);  // N_0^0 = 1 / sqrt(4 pi)
   T re = T(1), im = T(0);                // (x + i y)^m
   for (int m = 0; m <= lmax; ++m) {
     if (m > 0) {
-      diagonal *= T(table.diagonal_step[m]);
+      diagonal *= detail::sh_constant<T>(table.diagonal_step[m]);
       const T next_re = re * x - im * y;
       im = re * y + im * x;
       re = next_re;
@@ -63,11 +72,11 @@ void for_each_sh(Lmax lmax, T x, T y, T z, Visit&& visit) {
     emit(m, diagonal);
     if (m == lmax) break;
     T previous = diagonal;
-    T current = T(table.first_step[m]) * z * diagonal;
+    T current = detail::sh_constant<T>(table.first_step[m]) * z * diagonal;
     emit(m + 1, current);
     for (int l = m + 2; l <= lmax; ++l) {
       const int k = l * (l + 1) / 2 + m;
-      const T next = T(table.a[k]) * (z * current - T(table.b[k]) * previous);
+      const T next = detail::sh_constant<T>(table.a[k]) * (z * current - detail::sh_constant<T>(table.b[k]) * previous);
       emit(l, next);
       previous = current;
       current = next;
@@ -129,10 +138,20 @@ class ShDiffuseSum {
   explicit ShDiffuseSum(const ShCoefficients& lighting);
   int lmax() const { return lmax_; }
   RGB operator()(const Vec3& n) const;
+  // E at each of `normals`, into `out` (the same size): the same sums, a SIMD lane per
+  // normal above lmax 4, where the basis recurrence, the same for every normal, is most
+  // of the cost (equal to the one-normal form to float rounding).
+  void operator()(std::span<const Vec3> normals, std::span<RGB> out) const;
 
  private:
   template <typename Lmax>
   RGB sum(Lmax lmax, const Vec3& n) const;
+  template <typename Lmax>
+  void sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span<RGB> out) const;
+  // The band limits people use, as compile-time constants (1.3x to 2x faster than the
+  // loop): calls sum(constant) with lmax_ as a std::integral_constant where it is one.
+  template <typename Sum>
+  decltype(auto) with_band_limit(Sum&& sum) const;
   // lmax <= 4 (the integrator's default): the 25 basis polynomials written out.
   RGB sum_low_bands(const Vec3& n) const;
 

@@ -4,6 +4,7 @@
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"
 #include "inverse/material_fit.h"
+#include "inverse/noise_model.h"
 #include "inverse/samples.h"
 #include "inverse/texture_fit.h"
 #include "renderer/environment.h"
@@ -99,6 +100,22 @@ void BM_ShDiffuseSum(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ShDiffuseSum)->Arg(4)->Arg(8)->Arg(16);
+
+// The same sums for a batch of 1024 normals at once (SIMD lanes of normals above lmax 4).
+void BM_ShDiffuseSumLanes(benchmark::State& state) {
+  const Environment env(office_map(), {});
+  const ShDiffuseSum sum(env.sh(static_cast<int>(state.range(0))));
+  Pcg32 rng(4);
+  std::vector<Vec3> normals(1024);
+  for (Vec3& n : normals) n = Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f).normalized();
+  std::vector<RGB> out(normals.size());
+  for (auto _ : state) {
+    sum(normals, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetItemsProcessed(state.iterations() * int64_t(normals.size()));
+}
+BENCHMARK(BM_ShDiffuseSumLanes)->Arg(4)->Arg(8)->Arg(16);
 
 void BM_MaterialSample(benchmark::State& state) {
   const PolishedMaterial material(0.0452f, RGB(0.9765f, 0.0186f, 0.0f));
@@ -198,6 +215,21 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
         fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
 }
+// The captures' noise model alone (inverse/noise_model.h), on the same three views read as
+// photographs: each sample's window median, the lighting fit's (and the joint fit's)
+// largest single cost on full-band captures.
+void BM_NoiseModel3x512(benchmark::State& state) {
+  const CaptureSet captures = read_transforms(benchmark_captures("white_sphere_office", "novel_0,novel_1"));
+  const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
+  const RayTracer tracer(scene);
+  const SampleSet set = collect_samples(captures, tracer, scene, {});
+  std::vector<RGB> observed;
+  for (const Sample& s : set.samples) observed.push_back(s.observed);
+  for (auto _ : state) benchmark::DoNotOptimize(estimate_noise(observed, set, /*noise_free=*/false));
+  state.counters["samples"] = double(set.samples.size());
+}
+BENCHMARK(BM_NoiseModel3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_LightingFit3x512(benchmark::State& state) { lighting_fit_benchmark(state, 4); }
 BENCHMARK(BM_LightingFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 void BM_LightingFitTwoPasses3x512(benchmark::State& state) { lighting_fit_benchmark(state, 16); }

@@ -208,6 +208,34 @@ TEST(ShDiffuseSum, WrittenOutLowBandsEqualTheRecurrence) {
   }
 }
 
+TEST(ShDiffuseSum, LanesOfNormalsEqualTheRecurrenceInDouble) {
+  // The form for many normals (SIMD lanes of them above lmax 4) against the definition,
+  // as above, at band limits with and without a compile-time form, for a count of
+  // normals that leaves the last lanes empty.
+  const Environment office(make_procedural_environment("office", 128, 64), {.rotation_degrees = 33.0f});
+  Pcg32 rng(8, 1);
+  for (int lmax : {3, 5, 8, 16}) {
+    const ShCoefficients& L = office.sh(lmax);
+    const ShDiffuseSum sum(L);
+    std::vector<Vec3> normals(37);
+    for (Vec3& n : normals) n = latlong_to_direction(Vec2(rng.next_float(), rng.next_float()));
+    std::vector<RGB> got(normals.size());
+    sum(normals, got);
+    for (size_t k = 0; k < normals.size(); ++k) {
+      const Vec3& n = normals[k];
+      RGBd expected = RGBd::Zero();
+      for_each_sh(lmax, double(n.x()), double(n.y()), double(n.z()), [&](int i, double y) {
+        int l = 0;
+        while ((l + 1) * (l + 1) <= i) ++l;
+        expected += sh_lambda(l) * sh_kernel_coefficient(l) * y * L.values[i];
+      });
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[k][c], expected[c], 1e-5 * (1.0 + std::abs(expected[c]))) << lmax << " " << k;
+    }
+  }
+  std::vector<RGB> wrong_size(2);
+  EXPECT_THROW(ShDiffuseSum(office.sh(8))(std::vector<Vec3>(3, Vec3::UnitZ()), wrong_size), Error);
+}
+
 TEST(ShDiffuseSum, ConvergesToTheDirectIntegralOverTheMap) {
   // E(n) = int L(w) g(n.w) max(n.w, 0) dw summed over every texel (Funk-Hecke says the SH
   // sum is this integral, truncated at lmax). At lmax 16 the office must agree closely.
