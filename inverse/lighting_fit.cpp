@@ -38,22 +38,29 @@ struct Moments {
 
 // The moments of all samples, chunk by chunk: chunk(first, A, B, C, O) fills the chunk's
 // rows as columns of A, B, C and its observations as rows of O (sized for it), and the
-// moments are then matrix products (A A^T, ...), which Eigen vectorises. With
+// moments are then matrix products, which Eigen vectorises: A, B and C are stacked, so
+// that those among the rows are the lower half of one symmetric product (a rank update),
+// with a fifth fewer multiplications than the six products apart. With
 // `observations_only` those of the rows among themselves are not formed.
+using ChunkRows = Eigen::Ref<Eigen::MatrixXd>;
 template <typename Chunk>
 Moments sum_moments(size_t count, int n, bool observations_only, Chunk&& chunk) {
   const size_t chunks = (count + kChunk - 1) / kChunk;
   std::vector<Moments> partial(chunks, Moments(n, observations_only));
   tbb::parallel_for(size_t(0), chunks, [&](size_t index) {
     const size_t first = index * kChunk, rows = std::min(count, first + kChunk) - first;
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, rows), B = A, C = A, O(rows, 3);
-    chunk(first, A, B, C, O);
+    Eigen::MatrixXd stacked = Eigen::MatrixXd::Zero(3 * n, Eigen::Index(rows)), O(rows, 3);
+    chunk(first, stacked.topRows(n), stacked.middleRows(n, n), stacked.bottomRows(n), O);
     Moments& m = partial[index];
-    m.ao.noalias() = A * O, m.bo.noalias() = B * O, m.co.noalias() = C * O;
+    const Eigen::MatrixXd with_observations = stacked * O;
+    m.ao = with_observations.topRows(n), m.bo = with_observations.middleRows(n, n), m.co = with_observations.bottomRows(n);
     m.oo = O.colwise().squaredNorm().transpose();
     if (observations_only) return;
-    m.aa.noalias() = A * A.transpose(), m.ab.noalias() = A * B.transpose(), m.ac.noalias() = A * C.transpose();
-    m.bb.noalias() = B * B.transpose(), m.bc.noalias() = B * C.transpose(), m.cc.noalias() = C * C.transpose();
+    Eigen::MatrixXd lower = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+    lower.selfadjointView<Eigen::Lower>().rankUpdate(stacked);
+    const Eigen::MatrixXd gram = lower.selfadjointView<Eigen::Lower>();
+    auto block = [&](int row, int column) { return gram.block(row * n, column * n, n, n); };
+    m.aa = block(0, 0), m.ab = block(0, 1), m.ac = block(0, 2), m.bb = block(1, 1), m.bc = block(1, 2), m.cc = block(2, 2);
   });
   Moments total(n, observations_only);
   for (const Moments& m : partial) total += m;
@@ -88,10 +95,11 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   data.mu.resize(count);
   data.frame.resize(count);
   std::vector<RGB> observations(count);
-  const Moments moments = sum_moments(count, n, false, [&](size_t first, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
-                                                           Eigen::MatrixXd& C, Eigen::MatrixXd& O) {
-    Eigen::VectorXd y(n);
-    std::vector<float> basis(n);
+  const Moments moments = sum_moments(count, n, false, [&](size_t first, ChunkRows A, ChunkRows B,
+                                                           ChunkRows C, Eigen::MatrixXd& O) {
+    std::vector<float> basis(n), g(size_t(footprint) * footprint);
+    std::vector<double> sum_Y(n), sum_gY(n);
+    std::vector<Vec3> reflected(g.size());
     std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kChunk];
     std::vector<float>& tap_share_g = chunk_tap_share_g[first / kChunk];
     tap_normal.reserve(size_t(O.rows())), tap_share_g.reserve(size_t(O.rows()));  // one per pixel sample
@@ -99,19 +107,21 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
       const size_t k = first + size_t(r);
       for_each_model_pixel(samples, k, captures, tracer, footprint,
                            [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
+                             // Per ray, its mirror direction and g(n.v); their basis sums over the rays.
+                             double sum_g = 0.0;
+                             for (size_t ray = 0; ray < rays.size(); ++ray) {
+                               g[ray] = float(coat_transmittance_g(rays[ray].normal.dot(rays[ray].view)));
+                               reflected[ray] = reflect(rays[ray].view, rays[ray].normal);
+                               sum_g += g[ray];
+                             }
+                             sh_sum(lmax, std::span(reflected).first(rays.size()), std::span(g).first(rays.size()), sum_Y,
+                                    sum_gY);
                              sh_eval<float>(lmax, centre_normal, basis);
-                             for (int i = 0; i < n; ++i) y[i] = basis[i] * kernel[i];  // Lambda h Y(n)
-                             const double share = weight / rays.size();
-                             double share_g = 0.0;
-                             for (const FootprintRay& ray : rays) {
-                               const double g = coat_transmittance_g(ray.hit.normal.dot(ray.view));
-                               sh_eval<float>(lmax, reflect(ray.view, ray.hit.normal), basis);
-                               for (int i = 0; i < n; ++i) {
-                                 A(i, r) += share * basis[i];
-                                 B(i, r) += share * g * basis[i];
-                                 C(i, r) += share * g * y[i];
-                               }
-                               share_g += share * g;
+                             const double share = weight / rays.size(), share_g = share * sum_g;
+                             for (int i = 0; i < n; ++i) {
+                               A(i, r) += share * sum_Y[i];
+                               B(i, r) += share * sum_gY[i];
+                               C(i, r) += share_g * basis[i] * kernel[i];  // share g Lambda h Y(n)
                              }
                              tap_normal.push_back(centre_normal);
                              tap_share_g.push_back(float(share_g));
@@ -178,8 +188,8 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
   // The observations are replaced last, with their moments, so that `data` stays whole
   // when an exception leaves.
   std::vector<RGB> observations(count);
-  const Moments moments = sum_moments(count, n, true, [&](size_t first, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
-                                                          Eigen::MatrixXd& C, Eigen::MatrixXd& O) {
+  const Moments moments = sum_moments(count, n, true, [&](size_t first, ChunkRows A, ChunkRows B,
+                                                          ChunkRows C, Eigen::MatrixXd& O) {
     // E_above at the chunk's taps, all at once (SIMD lanes of normals).
     const size_t first_tap = data.first_tap[first], taps = data.first_tap[first + size_t(O.rows())] - first_tap;
     std::vector<RGB> E_tap(above_sum ? taps : 0);

@@ -26,8 +26,8 @@ std::vector<ShadingTerms> shading_terms(const SampleSet& samples, const CaptureS
                            const RGB E = diffuse_sum(centre_normal);
                            const float share = weight / rays.size();
                            for (const FootprintRay& ray : rays) {
-                             const RGB L = environment.eval(reflect(ray.view, ray.hit.normal));
-                             const float mu = ray.hit.normal.dot(ray.view);
+                             const RGB L = environment.eval(reflect(ray.view, ray.normal));
+                             const float mu = ray.normal.dot(ray.view);
                              for (int c = 0; c < 3; ++c) {
                                ShadingBasis<float> basis(mu, L[c], E[c]);
                                terms[k][c] += (basis *= share);

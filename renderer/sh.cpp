@@ -307,6 +307,50 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
   return result;
 }
 
+namespace {
+
+template <typename Lmax>
+void sh_sum_lanes(Lmax lmax, std::span<const Vec3> directions, std::span<const float> weights, std::span<double> sums,
+                  std::span<double> weighted) {
+  using Lanes = std::experimental::native_simd<float>;
+  constexpr size_t kWidth = Lanes::size();
+  const int count = sh_count(lmax);
+  thread_local std::vector<Lanes> plain, times_weight;  // per thread, their room reused
+  plain.assign(size_t(count), Lanes(0.0f));
+  times_weight.assign(size_t(count), Lanes(0.0f));
+  for (size_t first = 0; first < directions.size(); first += kWidth) {
+    // The directions' coordinates lane by lane; lanes past the end count 0 times.
+    std::array<std::array<float, kWidth>, 5> lanes{};
+    for (size_t lane = 0; lane < kWidth && first + lane < directions.size(); ++lane) {
+      for (int axis = 0; axis < 3; ++axis) lanes[axis][lane] = directions[first + lane][axis];
+      lanes[3][lane] = 1.0f;
+      lanes[4][lane] = weights[first + lane];
+    }
+    auto load = [&](int row) { return Lanes(lanes[row].data(), std::experimental::element_aligned); };
+    const Lanes present = load(3), weight = load(4);
+    for_each_sh(lmax, load(0), load(1), load(2), [&](int i, const Lanes& y) {
+      plain[i] += present * y;
+      times_weight[i] += weight * y;
+    });
+  }
+  for (int i = 0; i < count; ++i) {
+    sums[i] = double(std::experimental::reduce(plain[i]));
+    weighted[i] = double(std::experimental::reduce(times_weight[i]));
+  }
+}
+
+}  // namespace
+
+void sh_sum(int lmax, std::span<const Vec3> directions, std::span<const float> weights, std::span<double> sums,
+            std::span<double> weighted) {
+  detail::check_lmax(lmax);
+  const size_t count = size_t(sh_count(lmax));
+  if (weights.size() != directions.size() || sums.size() < count || weighted.size() < count)
+    throw Error("sh_sum: one weight per direction and room for every basis function");
+  if (lmax == 4) sh_sum_lanes(std::integral_constant<int, 4>(), directions, weights, sums, weighted);  // the fits' default
+  else sh_sum_lanes(lmax, directions, weights, sums, weighted);
+}
+
 template <typename Lmax>
 void ShDiffuseSum::sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span<RGB> out) const {
   using Lanes = std::experimental::native_simd<float>;

@@ -91,6 +91,12 @@ void sh_eval(int lmax, const Eigen::Matrix<T, 3, 1>& d, std::span<T> out) {
   for_each_sh(lmax, d.x(), d.y(), d.z(), [&](int i, T value) { out[i] = value; });
 }
 
+// Sums of the basis over unit directions d_k, SIMD lanes of them at a time: for every
+// index i (l <= lmax), sums[i] = sum_k Y_i(d_k) and weighted[i] = sum_k w_k Y_i(d_k)
+// (summed in float).
+void sh_sum(int lmax, std::span<const Vec3> directions, std::span<const float> weights, std::span<double> sums,
+            std::span<double> weighted);
+
 // Lambda_l = sqrt(4 pi / (2l + 1)).
 double sh_lambda(int l);
 

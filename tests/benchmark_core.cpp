@@ -198,19 +198,21 @@ BENCHMARK(BM_TextureFit4x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The issue-6 figure for lighting recovery: samples, shading rows and the lighting (L_lm
 // and the 256x128 map) of the white sphere at its known material, on three sh-rendered
-// 512x512 views: one fit for these band-limited captures; two (diffuse bands to 16
-// predicted from the first, lighting_fit.h) as for photographs and path-traced captures.
+// 512x512 views: one fit for these band-limited captures, each pixel modelled by the
+// 2 x 2 rays the sh integrator took; as for photographs and path-traced captures, two
+// fits (diffuse bands to 16 predicted from the first, lighting_fit.h), the data-driven
+// noise model and pixels of invert-fit's default 4 x 4 rays.
 void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
   const CaptureSet captures = read_transforms(benchmark_captures("white_sphere_office", "novel_0,novel_1"));
   const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   const RayTracer tracer(scene);
   const PolishedMaterial material(captures.material["R0"].get<float>(), RGB(captures.material["Rd"][0].get<float>(),
                                   captures.material["Rd"][1].get<float>(), captures.material["Rd"][2].get<float>()));
-  const int footprint = captures.renderer.value("ss", 1);
+  const bool photographs = diffuse_lmax > 4;
+  const int footprint = photographs ? 4 : captures.renderer.value("ss", 1);
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
-    // The second fit's captures, as photographs, with the data-driven noise model.
-    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/diffuse_lmax <= 4);
+    LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/!photographs);
     benchmark::DoNotOptimize(
         fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
