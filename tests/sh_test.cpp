@@ -236,6 +236,34 @@ TEST(ShDiffuseSum, LanesOfNormalsEqualTheRecurrenceInDouble) {
   EXPECT_THROW(ShDiffuseSum(office.sh(8))(std::vector<Vec3>(3, Vec3::UnitZ()), wrong_size), Error);
 }
 
+TEST(Sh, SumsOverDirectionsEqualTheRecurrenceInDouble) {
+  // sh_sum (SIMD lanes of directions) against the basis summed one direction at a time
+  // in double, for counts that fill and that leave lanes empty.
+  Pcg32 rng(9, 2);
+  for (int lmax : {4, 6}) {
+    for (size_t count : {size_t(1), size_t(16), size_t(37)}) {
+      std::vector<Vec3> directions(count);
+      std::vector<float> weights(count);
+      for (size_t k = 0; k < count; ++k) {
+        directions[k] = latlong_to_direction(Vec2(rng.next_float(), rng.next_float()));
+        weights[k] = rng.next_float();
+      }
+      std::vector<double> sums(sh_count(lmax)), weighted(sh_count(lmax));
+      sh_sum(lmax, directions, weights, sums, weighted);
+      std::vector<double> expected(sh_count(lmax), 0.0), expected_weighted(sh_count(lmax), 0.0);
+      for (size_t k = 0; k < count; ++k)
+        for_each_sh(lmax, double(directions[k].x()), double(directions[k].y()), double(directions[k].z()),
+                    [&](int i, double y) { expected[i] += y, expected_weighted[i] += weights[k] * y; });
+      for (int i = 0; i < sh_count(lmax); ++i) {
+        EXPECT_NEAR(sums[i], expected[i], 1e-5 * double(count)) << lmax << " " << count << " " << i;
+        EXPECT_NEAR(weighted[i], expected_weighted[i], 1e-5 * double(count)) << lmax << " " << count << " " << i;
+      }
+    }
+  }
+  std::vector<double> room(25);
+  EXPECT_THROW(sh_sum(4, std::vector<Vec3>(2, Vec3::UnitZ()), std::vector<float>(1, 1.0f), room, room), Error);
+}
+
 TEST(ShDiffuseSum, ConvergesToTheDirectIntegralOverTheMap) {
   // E(n) = int L(w) g(n.w) max(n.w, 0) dw summed over every texel (Funk-Hecke says the SH
   // sum is this integral, truncated at lmax). At lmax 16 the office must agree closely.
