@@ -80,8 +80,9 @@ double median_near(const double* v, size_t n, double guess) {
   for (size_t i = 0; i < padded; i += Lanes::size())
     below += size_t(std::experimental::popcount(Lanes(v + i, std::experimental::element_aligned) < guess));
   const size_t rank = n / 2;
-  if (const auto found = rank < below ? walk<false>(v, padded, guess, below - 1 - rank) : walk<true>(v, padded, guess, rank - below))
-    return *found;
+  const std::optional<double> found =
+      rank < below ? walk<false>(v, padded, guess, below - 1 - rank) : walk<true>(v, padded, guess, rank - below);
+  if (found) return *found;
   thread_local std::vector<double> values;
   values.assign(v, v + n);
   std::nth_element(values.begin(), values.begin() + ptrdiff_t(rank), values.end());
@@ -136,7 +137,8 @@ std::vector<PixelGrid> pixel_grids(const SampleSet& samples) {
 // test of fit (quadratic_weights) sees the detail. Measured on path-traced captures of
 // the white sphere under studio_small_03 (256 spp, 256 x 256, seeds 0-2), R0 +0.017,
 // +0.013, +0.021 with the mean; +0.0070, +0.0048, +0.0082 with the median; +0.0033,
-// +0.0022, +0.0038 with the test of fit as well (README, "Small lamps, path-traced").
+// +0.0022, +0.0038 with the test of fit as well (inverse/README.md, "Small lamps,
+// path-traced").
 //
 // Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
 // is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp

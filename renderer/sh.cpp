@@ -309,28 +309,31 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
 
 namespace {
 
+using FloatLanes = std::experimental::native_simd<float>;
+
+// Lanes of the directions first, first + 1, ... (the last one repeated past the end).
+std::array<FloatLanes, 3> direction_lanes(std::span<const Vec3> directions, size_t first) {
+  auto axis = [&](int a) {
+    return FloatLanes([&](size_t lane) { return directions[std::min(first + lane, directions.size() - 1)][a]; });
+  };
+  return {axis(0), axis(1), axis(2)};
+}
+
 template <typename Lmax>
 void sh_sum_lanes(Lmax lmax, std::span<const Vec3> directions, std::span<const float> weights, std::span<double> sums,
                   std::span<double> weighted) {
-  using Lanes = std::experimental::native_simd<float>;
-  constexpr size_t kWidth = Lanes::size();
   const int count = sh_count(lmax);
-  thread_local std::vector<Lanes> plain, times_weight;  // per thread, their room reused
-  plain.assign(size_t(count), Lanes(0.0f));
-  times_weight.assign(size_t(count), Lanes(0.0f));
-  for (size_t first = 0; first < directions.size(); first += kWidth) {
-    // The directions' coordinates lane by lane; lanes past the end count 0 times.
-    std::array<std::array<float, kWidth>, 5> lanes{};
-    for (size_t lane = 0; lane < kWidth && first + lane < directions.size(); ++lane) {
-      for (int axis = 0; axis < 3; ++axis) lanes[axis][lane] = directions[first + lane][axis];
-      lanes[3][lane] = 1.0f;
-      lanes[4][lane] = weights[first + lane];
-    }
-    auto load = [&](int row) { return Lanes(lanes[row].data(), std::experimental::element_aligned); };
-    const Lanes present = load(3), weight = load(4);
-    for_each_sh(lmax, load(0), load(1), load(2), [&](int i, const Lanes& y) {
-      plain[i] += present * y;
-      times_weight[i] += weight * y;
+  thread_local std::vector<FloatLanes> plain, times_weight;  // per thread, their room reused
+  plain.assign(size_t(count), FloatLanes(0.0f));
+  times_weight.assign(size_t(count), FloatLanes(0.0f));
+  for (size_t first = 0; first < directions.size(); first += FloatLanes::size()) {
+    // Lanes past the end count 0 times.
+    const FloatLanes present([&](size_t lane) { return first + lane < directions.size() ? 1.0f : 0.0f; });
+    const FloatLanes weight([&](size_t lane) { return first + lane < directions.size() ? weights[first + lane] : 0.0f; });
+    const auto [x, y, z] = direction_lanes(directions, first);
+    for_each_sh(lmax, x, y, z, [&](int i, const FloatLanes& basis) {
+      plain[i] += present * basis;
+      times_weight[i] += weight * basis;
     });
   }
   for (int i = 0; i < count; ++i) {
@@ -353,26 +356,20 @@ void sh_sum(int lmax, std::span<const Vec3> directions, std::span<const float> w
 
 template <typename Lmax>
 void ShDiffuseSum::sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span<RGB> out) const {
-  using Lanes = std::experimental::native_simd<float>;
-  constexpr size_t kWidth = Lanes::size();
   const int count = sh_count(lmax);
-  std::vector<Lanes> basis(static_cast<size_t>(count));
-  for (size_t first = 0; first < normals.size(); first += kWidth) {
-    // The normals' coordinates, lane by lane (the last normal repeated past the end).
-    std::array<std::array<float, kWidth>, 3> xyz;
-    for (size_t lane = 0; lane < kWidth; ++lane)
-      for (int axis = 0; axis < 3; ++axis) xyz[axis][lane] = normals[std::min(first + lane, normals.size() - 1)][axis];
-    auto coordinate = [&](int axis) { return Lanes(xyz[axis].data(), std::experimental::element_aligned); };
-    for_each_sh(lmax, coordinate(0), coordinate(1), coordinate(2), [&](int i, const Lanes& y) { basis[i] = y; });
+  std::vector<FloatLanes> basis(static_cast<size_t>(count));
+  for (size_t first = 0; first < normals.size(); first += FloatLanes::size()) {
+    const auto [x, y, z] = direction_lanes(normals, first);
+    for_each_sh(lmax, x, y, z, [&](int i, const FloatLanes& value) { basis[i] = value; });
     for (int c = 0; c < 3; ++c) {
       // Two running sums, so that each multiply-add does not wait on the one before.
       const float* weights = &weighted_[size_t(c) * count];
-      Lanes even(0.0f), odd(0.0f);
+      FloatLanes even(0.0f), odd(0.0f);
       int i = 0;
       for (; i + 1 < count; i += 2) even += weights[i] * basis[i], odd += weights[i + 1] * basis[i + 1];
       if (i < count) even += weights[i] * basis[i];
-      const Lanes total = even + odd;
-      for (size_t lane = 0; lane < kWidth && first + lane < normals.size(); ++lane) out[first + lane][c] = total[lane];
+      const FloatLanes total = even + odd;
+      for (size_t lane = 0; lane < FloatLanes::size() && first + lane < normals.size(); ++lane) out[first + lane][c] = total[lane];
     }
   }
 }
