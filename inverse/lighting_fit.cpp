@@ -40,7 +40,7 @@ struct Moments {
 // rows as columns of A, B, C and its observations as rows of O (sized for it), and the
 // moments are then matrix products, which Eigen vectorises: A, B and C are stacked, so
 // that those among the rows are the lower half of one symmetric product (a rank update),
-// with a fifth fewer multiplications than the six products apart. With
+// with a quarter fewer multiplications than the six products apart. With
 // `observations_only` those of the rows among themselves are not formed.
 using ChunkRows = Eigen::Ref<Eigen::MatrixXd>;
 template <typename Chunk>
@@ -545,8 +545,8 @@ class SplatRows {
 // mirror's directions spread fastest near the silhouette), so that a texel's share of a
 // source smaller than their spacing was decided by a few samples, hit or missed. Measured
 // on noise-free captures (512 x 512, three views, the map box-filtered to 64 x 32):
-// St Fagans 5.4% -> 2.4%, Grace Cathedral 7.6% -> 3.0% (README, "Maps whose sources are
-// smaller than the output map's texels").
+// St Fagans 5.4% -> 2.4%, Grace Cathedral 7.6% -> 3.0% (inverse/README.md, "Maps whose
+// sources are smaller than the output map's texels").
 //
 // `noise` is the mean over the texel's samples of the captures' noise model, not each
 // sample's own: the model's floor follows the pixel's level (noise_model.h), which in a

@@ -355,7 +355,7 @@ TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) {
 // issue's noise-free 0.003 here (at 512x512 too: -0.0086), and meets its path-traced
 // 0.01. The remaining error is in the red sphere's red channel: L00 of its mirror
 // estimates is +0.9% at 512x512, against +0.1% in green and blue, where the diffuse
-// term is near zero (there the mirror is 7% of the light: README, "Small bright
+// term is near zero (there the mirror is 7% of the light: inverse/README.md, "Small bright
 // sources").
 TEST(InvertFitJoint, StudioLampsNeedTheTrimmedDiffuseField) {
   expect_joint_bounds_under_map("studio_small_03_1k.hdr", "256x256", 0.01);
@@ -529,11 +529,11 @@ void expect_path_traced_joint(const std::string& scene, const std::string& optio
 // +0.0009; worst Rd +0.0051, -0.022, +0.0088, +0.011, +0.0085, +0.013; worst scale 0.993,
 // 1.035, 0.987, 0.985, 0.987, 0.981. Measured now (the noise model's median, the 5 x 5
 // stencils' test of fit), seed 0: R0 -0.0002, Rd -0.0028, scale 1.004; twelve seeds in
-// the README ("Small lamps, path-traced"). Asserted on seed 0: the path-traced bounds
-// (R0 0.003, Rd 0.01, scale 3%), which the 3 x 3 comparison misses in Rd (+0.013). Of
+// inverse/README.md ("Small lamps, path-traced"). Asserted on seed 0: the path-traced
+// bounds (R0 0.003, Rd 0.01, scale 3%), which the 3 x 3 comparison misses in Rd (+0.013). Of
 // seeds 0-11, 6, 7 and 10 miss Rd, so a change to the path tracer's random stream can
 // fail this test by chance about a quarter of the time: it checks this seed's numbers,
-// and the twelve seeds in the README are the statistics.
+// and the twelve seeds in inverse/README.md are the statistics.
 TEST(InvertFitJoint, PathTracedPairsAreWeightedByTheirNoise) {
   expect_path_traced_joint("white_sphere_blue_room.gltf", "", 0.003, 0.01, 0.03);
 }
@@ -544,8 +544,8 @@ TEST(InvertFitJoint, PathTracedPairsAreWeightedByTheirNoise) {
 // (cross_view.cpp, kGoodness). Measured on the white sphere (256 x 256, 256 spp, seed 0):
 // R0 +0.0033, worst Rd +0.023, scale 0.966; with the window's mean and 5 x 5 stencils
 // untested R0 was +0.017 (Rd +0.10, scale 0.87). Rd and the scale still miss the issue's
-// 0.01 and 3% here (README, "Small lamps, path-traced"); asserted: R0 within 0.005, Rd
-// within 0.04 and the scale within 5%, which the code before fails.
+// 0.01 and 3% here (inverse/README.md, "Small lamps, path-traced"); asserted: R0 within
+// 0.005, Rd within 0.04 and the scale within 5%, which the code before fails.
 TEST(InvertFitJoint, PathTracedStudioLampsAreNotNoise) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   expect_path_traced_joint("white_sphere_office.gltf", "--env " + studio.string(), 0.005, 0.04, 0.05);
