@@ -25,7 +25,9 @@ struct FootprintRay {
 // `centre_normal` the normal seen through the pixel centre (a pixel sample's own), `rays`
 // the footprint rays that hit the object, `weight` the pixel's share of the sample (1 for
 // a pixel sample, bilinear for a point). Each ray's own share is weight / rays.size().
-// The footprint's rays are cast kLanes at a time (RayTracer's SIMD lanes).
+// The footprint's rays are cast kLanes at a time (RayTracer's SIMD lanes). `rays` is
+// per-thread storage, reused by the next pixel: `pixel` must not start parallel work,
+// whose tasks this thread could run meanwhile.
 template <typename PixelVisit>
 void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& captures, const RayTracer& tracer,
                           int footprint, PixelVisit&& pixel) {

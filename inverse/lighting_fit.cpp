@@ -58,9 +58,11 @@ Moments sum_moments(size_t count, int n, bool observations_only, Chunk&& chunk) 
     if (observations_only) return;
     Eigen::MatrixXd lower = Eigen::MatrixXd::Zero(3 * n, 3 * n);
     lower.selfadjointView<Eigen::Lower>().rankUpdate(stacked);
-    const Eigen::MatrixXd gram = lower.selfadjointView<Eigen::Lower>();
-    auto block = [&](int row, int column) { return gram.block(row * n, column * n, n, n); };
-    m.aa = block(0, 0), m.ab = block(0, 1), m.ac = block(0, 2), m.bb = block(1, 1), m.bc = block(1, 2), m.cc = block(2, 2);
+    // Its blocks: on the diagonal, symmetric from their lower halves; below it, B A^T, ...
+    auto block = [&](int row, int column) { return lower.block(row * n, column * n, n, n); };
+    m.aa = block(0, 0).template selfadjointView<Eigen::Lower>(), m.bb = block(1, 1).template selfadjointView<Eigen::Lower>();
+    m.cc = block(2, 2).template selfadjointView<Eigen::Lower>();
+    m.ab = block(1, 0).transpose(), m.ac = block(2, 0).transpose(), m.bc = block(2, 1).transpose();
   });
   Moments total(n, observations_only);
   for (const Moments& m : partial) total += m;

@@ -25,19 +25,8 @@ constexpr size_t kNoiseValues = 8;
 // freedom): the window's median residual over this is the noise's variance.
 constexpr double kMedianOfChiSquare1 = 0.45493642311957;
 
-// The median (the element of rank n / 2) of v[0 .. n - 1], exactly, v padded with NaN
-// (which no comparison counts) to a whole number of SIMD lanes. `guess`, a value likely
-// near it (the last window's median: neighbouring windows share most of their pixels),
-// is ranked first by counting the values below it; the median is then a few ranks from
-// it, reached by as many passes for the nearest value beyond the last one found, each
-// a vectorised scan of v, and one more that counts that value's ties. Selection
-// (std::nth_element) mispredicts about half its branches on 72 values in random order;
-// with it on the 41% of windows whose median is over 3 ranks from the last one's (and a
-// scalar walk for the others), the noise model took 249 ms for three 512 x 512 views,
-// 104 ms with this walk (BM_NoiseModel3x512). Measured on those views, 89% of the
-// medians are within 8 ranks of the last one's and 99.9% within 20; those further (the
-// first window of a thread, wider windows) take the selection.
 using Lanes = std::experimental::native_simd<double>;
+static_assert(Lanes::size() <= kMedianPadding);
 constexpr size_t kWalkRanks = 32;
 
 // The nearest value beyond `bound` in v[0 .. padded - 1] (above it, or at or above it
@@ -65,8 +54,8 @@ std::pair<double, size_t> nearest_beyond(const double* v, size_t padded, double 
 // passes.
 template <bool kUpwards>
 std::optional<double> walk(const double* v, size_t padded, double bound, size_t k) {
-  for (size_t pass = 0; pass < kWalkRanks && k < kWalkRanks; ++pass) {
-    const auto [value, ties] = nearest_beyond<kUpwards>(v, padded, bound, pass == 0);
+  for (bool first = true; k < kWalkRanks; first = false) {  // each pass takes one rank or more
+    const auto [value, ties] = nearest_beyond<kUpwards>(v, padded, bound, first);
     if (ties == 0) return std::nullopt;
     if (k < ties) return value;
     k -= ties, bound = value;
@@ -74,7 +63,19 @@ std::optional<double> walk(const double* v, size_t padded, double bound, size_t 
   return std::nullopt;
 }
 
+}  // namespace
+
+// How: `guess` is first ranked by counting the values below it; the median is then a
+// few ranks from it, reached by as many passes for the nearest value beyond the
+// last one found, each a vectorised scan of v, and one more that counts that value's
+// ties. Selection (std::nth_element) mispredicts about half its branches on 72 values in
+// random order; with it on the 41% of windows whose median is over 3 ranks from the last
+// one's (and a scalar walk for the others), the noise model took 249 ms for three
+// 512 x 512 views, 104 ms with this walk (BM_NoiseModel3x512). Measured on those views,
+// 89% of the medians are within 8 ranks of the last one's and 99.9% within 20; those
+// further (the first window of a thread, wider windows) take the selection.
 double median_near(const double* v, size_t n, double guess) {
+  if (n == 0) throw Error("the median of no values");
   const size_t padded = (n + Lanes::size() - 1) / Lanes::size() * Lanes::size();
   size_t below = 0;
   for (size_t i = 0; i < padded; i += Lanes::size())
@@ -88,8 +89,6 @@ double median_near(const double* v, size_t n, double guess) {
   std::nth_element(values.begin(), values.begin() + ptrdiff_t(rank), values.end());
   return values[rank];
 }
-
-}  // namespace
 
 PixelGrid::PixelGrid(const SampleSet& set, const std::vector<uint32_t>& members) {
   if (members.empty()) return;  // a view that does not see the object
@@ -177,8 +176,10 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
         if (m < 0) return;
         (di == 0 || dj == 0 ? edges : corners) += observed[m].cast<double>();
       }
-    residual[samples.samples[k].frame][size_t(j - grid.y0()) * grid.width() + (i - grid.x0())] =
-        (observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25;
+    // Left -1 (no residual) unless finite in every channel: a window's median counts it
+    // in all three.
+    if (const RGBd e = (observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25; e.allFinite())
+      residual[samples.samples[k].frame][size_t(j - grid.y0()) * grid.width() + (i - grid.x0())] = e;
   });
   RGBd mean = RGBd::Zero();
   for (const RGB& o : observed) mean += o.cast<double>();
@@ -200,8 +201,8 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
       const auto [i, j] = pixel_of(k);
       for (int reach = kNoiseReach; !noise_free && n < kNoiseValues && reach <= 4 * kNoiseReach; reach *= 2) {
         n = 0;
-        // Room for the window and median_near's padding to whole SIMD lanes.
-        for (auto& v : values) v.resize(size_t(2 * reach + 1) * size_t(2 * reach + 1) + Lanes::size());
+        // Room for the window and median_near's padding.
+        for (auto& v : values) v.resize(size_t(2 * reach + 1) * size_t(2 * reach + 1) + kMedianPadding);
         const int x0 = std::max(i - reach, grid.x0()), x1 = std::min(i + reach, grid.x0() + grid.width() - 1);
         for (int y = std::max(j - reach, grid.y0()); y <= std::min(j + reach, grid.y0() + grid.height() - 1); ++y) {
           const RGBd* row = residual[frame].data() + size_t(y - grid.y0()) * grid.width();
@@ -220,7 +221,7 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
     thread_local RGBd last_median = RGBd::Constant(-1.0);
     if (n > 0)
       for (int c = 0; c < 3; ++c) {
-        std::fill_n(values[c].begin() + ptrdiff_t(n), Lanes::size(), NAN);  // median_near's padding
+        std::fill_n(values[c].begin() + ptrdiff_t(n), kMedianPadding, NAN);
         const double median = median_near(values[c].data(), n, last_median[c]);
         last_median[c] = median;
         estimate[c] = std::max(median / kMedianOfChiSquare1, floor[c]);

@@ -6,6 +6,7 @@
 
 #include "inverse/samples.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -46,6 +47,14 @@ class PixelGrid {
   int x0_ = 0, y0_ = 0, width_ = 0, height_ = 0;
   std::vector<int64_t> grid_;  // pixel -> sample, -1 where none
 };
+
+// The median (the element of rank n / 2, from 0) of v[0 .. n - 1], n > 0, exactly; v is
+// followed by kMedianPadding NaNs (which no comparison counts: it is read in whole SIMD
+// lanes). `guess`, a value likely near the median (estimate_noise passes the last
+// window's: neighbouring windows share most of their pixels), only decides how fast it
+// is found.
+inline constexpr size_t kMedianPadding = 8;
+double median_near(const double* v, size_t n, double guess);
 
 // One grid per frame of the set (pixel samples).
 std::vector<PixelGrid> pixel_grids(const SampleSet& samples);

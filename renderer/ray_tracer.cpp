@@ -172,9 +172,14 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
 
 void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool texture_coordinates) const {
   if (!lone_sphere_) {
+    // The rays given, one at a time; the unused lanes copy the last one's hit.
     for (int k = 0; k < kLanes; ++k) {
-      const std::optional<SurfaceHit> hit =
-          intersect(rays[std::min(k, count - 1)], std::numeric_limits<float>::infinity(), texture_coordinates);
+      if (k >= count) {
+        out.hit[k] = out.hit[count - 1], out.normal.set(k, out.normal[count - 1]);
+        out.material[k] = out.material[count - 1], out.uv[k] = out.uv[count - 1];
+        continue;
+      }
+      const std::optional<SurfaceHit> hit = intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
       out.hit[k] = hit ? 1 : 0;
       out.normal.set(k, hit ? hit->normal : Vec3::UnitZ());
       out.material[k] = hit ? hit->material : 0;

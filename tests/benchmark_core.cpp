@@ -234,8 +234,8 @@ BENCHMARK(BM_NoiseModel3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_LightingFit3x512(benchmark::State& state) { lighting_fit_benchmark(state, 4); }
 BENCHMARK(BM_LightingFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
-void BM_LightingFitTwoPasses3x512(benchmark::State& state) { lighting_fit_benchmark(state, 16); }
-BENCHMARK(BM_LightingFitTwoPasses3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
+void BM_LightingFitPhotographs3x512(benchmark::State& state) { lighting_fit_benchmark(state, 16); }
+BENCHMARK(BM_LightingFitPhotographs3x512)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The issue-6 figure: the joint fit (samples, shading rows, the views' pairing, R0, Rd and
 // the lighting at them; not the re-renders) on three sh-rendered 512x512 views of the

@@ -4,6 +4,7 @@
 // holes included), and against the known variance of noise added to a smooth image.
 #include "inverse/noise_model.h"
 
+#include "renderer/error.h"
 #include "renderer/rng.h"
 
 #include <gtest/gtest.h>
@@ -102,6 +103,26 @@ std::vector<RGB> sorted_window_model(const SampleSet& set, int width, int height
     model.push_back(variance.cast<float>());
   }
   return model;
+}
+
+// median_near against sorting, for every count up to 100 (each padding of the SIMD
+// lanes), values with many ties, and guesses below, at, between and above every value
+// (the walk up and down from them, and the selection it falls back on).
+TEST(NoiseModel, MedianNearIsTheSortedMiddleForAnyGuess) {
+  Pcg32 rng(11);
+  std::vector<double> values, sorted;
+  for (size_t n = 1; n <= 100; ++n) {
+    values.resize(n + kMedianPadding);
+    for (size_t i = 0; i < n; ++i) values[i] = std::floor(8.0f * rng.next_float()) * 0.25 + (n % 3 == 0 ? rng.next_float() : 0.0);
+    std::fill(values.begin() + ptrdiff_t(n), values.end(), NAN);
+    sorted.assign(values.begin(), values.begin() + ptrdiff_t(n));
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<double> guesses = {-1.0, 1e9, NAN, -INFINITY, INFINITY};
+    for (const double v : sorted) guesses.insert(guesses.end(), {v, std::nextafter(v, -INFINITY), v + 0.1});
+    for (const double guess : guesses)
+      ASSERT_EQ(median_near(values.data(), n, guess), sorted[n / 2]) << "n " << n << ", guess " << guess;
+  }
+  EXPECT_THROW(median_near(values.data(), 0, 0.0), Error);
 }
 
 // Noise quantised to a few levels (so that windows hold many equal residuals), on a

@@ -797,6 +797,31 @@ TEST(RayTracer, TriangleHitInterpolatesUvAndShadingNormal) {
   EXPECT_FALSE(tracer.intersect({Vec3(2.5f, 0.5f, 3), Vec3(0, 0, -1)}).has_value());  // beside the quad
 }
 
+// The batched form on a scene Embree traverses (not a lone sphere): the rays given, one
+// at a time, and the lanes past `count` a copy of the last one.
+TEST(RayTracer, BatchedMeshHitsMatchOneRayAtATime) {
+  Scene scene;
+  scene.materials.push_back(SceneMaterial{"white", 0.04f, RGB::Ones(), -1});
+  TriangleMesh quad;
+  quad.positions = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}};
+  quad.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+  scene.meshes.push_back(quad);
+  const RayTracer tracer(scene);
+  Pcg32 rng(6);
+  for (int count : {1, 5, kLanes}) {
+    std::array<Ray, kLanes> rays;
+    for (int k = 0; k < count; ++k) rays[k] = {Vec3(3.0f * rng.next_float() - 0.5f, 3.0f * rng.next_float() - 0.5f, 3), Vec3(0, 0, -1)};
+    SurfaceHits hits;
+    tracer.intersect(rays.data(), count, hits, true);
+    for (int k = 0; k < kLanes; ++k) {
+      const auto one = tracer.intersect(rays[std::min(k, count - 1)]);
+      ASSERT_EQ(hits.hit[k] != 0, one.has_value()) << "count " << count << " lane " << k;
+      if (one) expect_vec_near(hits.normal[k], one->normal, 0.0f, "normal");
+    }
+  }
+}
+
 // A quad (0,0,0) (1,0,0) (1,1,0) (0,1,0), counter-clockwise seen from +Z, with explicit
 // NORMAL (0, 0, 1), under a node with scale (-1, 1, 1) (a mirror, as exporters write for
 // mirrored copies). The normal matrix diag(-1, 1, 1)^-T keeps (0, 0, 1), and glTF says a
