@@ -311,6 +311,20 @@ namespace {
 
 using FloatLanes = std::experimental::native_simd<float>;
 
+// sum(lmax) with the band limits people use as compile-time constants, so that the basis
+// recurrence unrolls (1.3x to 2x faster than the loop), else as an int.
+template <typename Sum>
+decltype(auto) with_band_limit(int lmax, Sum&& sum) {
+  switch (lmax) {
+    case 4: return sum(std::integral_constant<int, 4>());
+    case 6: return sum(std::integral_constant<int, 6>());
+    case 8: return sum(std::integral_constant<int, 8>());
+    case 12: return sum(std::integral_constant<int, 12>());
+    case 16: return sum(std::integral_constant<int, 16>());
+    default: return sum(lmax);
+  }
+}
+
 // Lanes of the directions first, first + 1, ... (the last one repeated past the end).
 std::array<FloatLanes, 3> direction_lanes(std::span<const Vec3> directions, size_t first) {
   auto axis = [&](int a) {
@@ -350,8 +364,7 @@ void sh_sum(int lmax, std::span<const Vec3> directions, std::span<const float> w
   const size_t count = size_t(sh_count(lmax));
   if (weights.size() != directions.size() || sums.size() < count || weighted.size() < count)
     throw Error("sh_sum: one weight per direction and room for every basis function");
-  if (lmax == 4) sh_sum_lanes(std::integral_constant<int, 4>(), directions, weights, sums, weighted);  // the fits' default
-  else sh_sum_lanes(lmax, directions, weights, sums, weighted);
+  with_band_limit(lmax, [&](auto band_limit) { sh_sum_lanes(band_limit, directions, weights, sums, weighted); });
 }
 
 template <typename Lmax>
@@ -374,20 +387,9 @@ void ShDiffuseSum::sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span
   }
 }
 
-template <typename Sum>
-decltype(auto) ShDiffuseSum::with_band_limit(Sum&& sum) const {
-  switch (lmax_) {
-    case 6: return sum(std::integral_constant<int, 6>());
-    case 8: return sum(std::integral_constant<int, 8>());
-    case 12: return sum(std::integral_constant<int, 12>());
-    case 16: return sum(std::integral_constant<int, 16>());
-    default: return sum(lmax_);
-  }
-}
-
 RGB ShDiffuseSum::operator()(const Vec3& n) const {
   if (lmax_ <= 4) return sum_low_bands(n);
-  return with_band_limit([&](auto lmax) { return sum(lmax, n); });
+  return with_band_limit(lmax_, [&](auto lmax) { return sum(lmax, n); });
 }
 
 void ShDiffuseSum::operator()(std::span<const Vec3> normals, std::span<RGB> out) const {
@@ -396,7 +398,7 @@ void ShDiffuseSum::operator()(std::span<const Vec3> normals, std::span<RGB> out)
     for (size_t k = 0; k < normals.size(); ++k) out[k] = sum_low_bands(normals[k]);
     return;
   }
-  with_band_limit([&](auto lmax) { sum_lanes(lmax, normals, out); });
+  with_band_limit(lmax_, [&](auto lmax) { sum_lanes(lmax, normals, out); });
 }
 
 }  // namespace glaze

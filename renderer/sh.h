@@ -154,10 +154,6 @@ class ShDiffuseSum {
   RGB sum(Lmax lmax, const Vec3& n) const;
   template <typename Lmax>
   void sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span<RGB> out) const;
-  // The band limits people use, as compile-time constants (1.3x to 2x faster than the
-  // loop): calls sum(constant) with lmax_ as a std::integral_constant where it is one.
-  template <typename Sum>
-  decltype(auto) with_band_limit(Sum&& sum) const;
   // lmax <= 4 (the integrator's default): the 25 basis polynomials written out.
   RGB sum_low_bands(const Vec3& n) const;
 
