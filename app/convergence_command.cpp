@@ -107,10 +107,12 @@ int command_convergence(const std::vector<std::string>& raw) {
 
   PathTracerOptions path_options;
   path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
-  const PathTracer tracer(scene, ray_tracer, environment, path_options);
   RenderOptions options;
   options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
   options.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
+  auto render_path = [&](const RenderOptions& passes) {
+    return PathIntegrator(scene, ray_tracer, environment, path_options, passes).render(camera);
+  };
 
   // The reference, and its own noise when glaze renders it.
   Image reference;
@@ -136,9 +138,9 @@ int command_convergence(const std::vector<std::string>& raw) {
     half.progress = isatty(STDERR_FILENO);
     std::cerr << "reference: " << reference_spp << " spp in two halves\n";
     half.seed = options.seed + 1000003;
-    RenderResult first = render(tracer, camera, half);
+    const IntegratorResult first = render_path(half);
     half.seed = options.seed + 2000003;
-    const RenderResult second = render(tracer, camera, half);
+    const IntegratorResult second = render_path(half);
     reference = first.image;
     for (size_t i = 0; i < reference.pixels.size(); ++i) reference.pixels[i] = 0.5f * (first.image.pixels[i] + second.image.pixels[i]);
     reference_noise = 0.5 * image_error(first.image, second.image, mask).relative_rmse;
@@ -152,7 +154,7 @@ int command_convergence(const std::vector<std::string>& raw) {
   std::vector<Row> rows;
   for (long spp = 1; spp <= max_spp; spp *= 2) {
     options.spp = static_cast<int>(spp);
-    const RenderResult result = render(tracer, camera, options);
+    const IntegratorResult result = render_path(options);
     Row row;
     row.integrator = "path";
     row.setting = std::to_string(spp) + " spp";
@@ -169,26 +171,27 @@ int command_convergence(const std::vector<std::string>& raw) {
     sh_options.lmax = lmax;
     sh_options.supersampling = sampling.ss;
     sh_options.refined_supersampling = sampling.refined;
-    return render_sh(scene, ray_tracer, environment, camera, sh_options);
+    return ShIntegrator(scene, ray_tracer, environment, sh_options).render(camera);
   };
   // The split's baselines, by sampling and by lmax.
   std::map<int, Image> finest_lmax, finest_ss;
-  for (size_t s = 0; s < std::size(kShSampling); ++s) finest_lmax[int(s)] = render_sh_at(kSplitLmax, kShSampling[s]);
-  for (int lmax : kShLmax) finest_ss[lmax] = render_sh_at(lmax, {kSplitSupersampling, 0});
+  for (size_t s = 0; s < std::size(kShSampling); ++s)
+    finest_lmax[int(s)] = render_sh_at(kSplitLmax, kShSampling[s]).image;
+  for (int lmax : kShLmax) finest_ss[lmax] = render_sh_at(lmax, {kSplitSupersampling, 0}).image;
   std::vector<std::string> split_lines;
   for (int lmax : kShLmax) {
     const auto projection_start = std::chrono::steady_clock::now();
     sh_project_latlong(environment.map(), environment.local_to_world(), lmax);  // what environment.sh() pays once
     const double projection_seconds = seconds_since(projection_start);
     for (size_t s = 0; s < std::size(kShSampling); ++s) {
-      const auto start = std::chrono::steady_clock::now();
-      const Image image = render_sh_at(lmax, kShSampling[s]);
+      const IntegratorResult sh = render_sh_at(lmax, kShSampling[s]);
+      const Image& image = sh.image;
       Row row;
       row.integrator = "sh";
       row.setting = "lmax " + std::to_string(lmax) + " " + kShSampling[s].label();
       row.lmax = lmax;
       row.sampling = int(s);
-      row.seconds = projection_seconds + seconds_since(start);
+      row.seconds = projection_seconds + sh.seconds;
       row.projection_seconds = projection_seconds;
       row.error = image_error(image, reference, mask);
       row.beyond_noise = beyond_noise(row.error.relative_rmse);

@@ -21,21 +21,23 @@ namespace {
 nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& scene, const RayTracer& tracer,
                         const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
                         const std::string& prefix) {
+  // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
+  const ShIntegrator integrator(scene, tracer, environment, {lmax, footprint, true, 0});
   nlohmann::json views = nlohmann::json::array();
   for (size_t f = 0; f < frames.size(); ++f) {
     const PinholeCamera& camera = frames[f].camera;
     const Image observed = read_image(frames[f].file_path);
     if (observed.width != camera.width || observed.height != camera.height)
       throw Error(frames[f].file_path + ": the image's size differs from its camera in transforms.json");
-    // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
-    const Image predicted = render_sh(scene, tracer, environment, camera, {lmax, footprint, true, 0});
+    const IntegratorResult rendered = integrator.render(camera);
+    const Image& predicted = rendered.image;
     Image residual(camera.width, camera.height);
     for (size_t i = 0; i < residual.pixels.size(); ++i) residual.pixels[i] = observed.pixels[i] - predicted.pixels[i];
     char name[64];
     std::snprintf(name, sizeof name, "%s_%03zu.exr", prefix.c_str(), f);
     const std::string render_file = (out / ("render_" + std::string(name))).string();
     const std::string residual_file = (out / ("residual_" + std::string(name))).string();
-    write_image(render_file, predicted, {{"glaze:integrator", "sh"}, {"glaze:lmax", std::to_string(lmax)}});
+    write_image(render_file, predicted, rendered.metadata);
     write_image(residual_file, residual);
     nlohmann::json view = {{"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
     const std::vector<uint8_t> mask = interior_mask(tracer, camera);

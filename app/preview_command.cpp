@@ -139,8 +139,7 @@ int command_preview(const std::vector<std::string>& raw) {
   ViewState view;
   view.display = display;
   const std::string integrator_name = args.text("integrator", scene.is_single_convex_object() ? "sh" : "path");
-  if (integrator_name != "path" && integrator_name != "sh") throw Error("unknown integrator '" + integrator_name + "' (known: path, sh)");
-  view.integrator = integrator_name == "sh" ? PreviewIntegrator::sh : PreviewIntegrator::path;
+  view.integrator = preview_integrator(integrator_name);
 
   const EnvironmentSpec spec = environment_spec(scene, args);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);

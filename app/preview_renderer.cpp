@@ -1,6 +1,8 @@
 #include "app/preview_renderer.h"
 
 #include "app/timing.h"
+#include "renderer/error.h"
+#include "renderer/integrator_registry.h"
 
 #include <tbb/parallel_for.h>
 
@@ -26,9 +28,14 @@ std::vector<float> n_dot_v_image(const RayTracer& tracer, const PinholeCamera& c
   return values;
 }
 
-
-
 }  // namespace
+
+PreviewIntegrator preview_integrator(std::string_view name) {
+  require_integrator(name);
+  if (name == PathIntegrator::kName) return PreviewIntegrator::path;
+  if (name == ShIntegrator::kName) return PreviewIntegrator::sh;
+  throw Error("the preview shows the path and sh integrators, not '" + std::string(name) + "'");
+}
 
 PreviewRenderer::PreviewRenderer(const Scene& scene, const RayTracer& tracer, const Environment& environment,
                                  const PathTracer& path, const PreviewRendererOptions& options, const PinholeCamera& camera,
@@ -38,6 +45,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const RayTracer& tracer, co
       environment_(environment),
       path_(path),
       options_(options),
+      sh_(scene, tracer, environment, options.sh),
       camera_(camera),
       integrator_(integrator),
       worker_([this] { run(); }) {}
@@ -166,9 +174,10 @@ void PreviewRenderer::render_steps() {
     // short and the window would show nothing new until the drag stops. It is published
     // (tagged with its own camera) and the next step starts from the newest camera.
     if (sh_next) {
-      state.sh = render_sh(scene_, tracer_, environment_, state.camera, options_.sh);
+      IntegratorResult sh = sh_.render(state.camera);
+      state.sh = std::move(sh.image);
       state.sh_ss = options_.sh.supersampling;
-      state.sh_seconds = seconds_since(start);
+      state.sh_seconds = sh.seconds;
       if (cancel_ && published_for_camera) continue;  // stale, and something is shown already
     } else {
       if (!passes->add_pass(published_for_camera ? &cancel_ : nullptr)) continue;

@@ -3,9 +3,11 @@
 // show the newest one at any moment without ever waiting for a pass.
 //
 // Per camera it keeps both integrators' images:
-//  - sh: one image at the requested lmax and ss (tens of milliseconds at 512x512);
+//  - sh: one image at the requested lmax and ss (ShIntegrator; tens of milliseconds at
+//    512x512);
 //  - path: passes of one sample per pixel (ProgressiveRender, so pass k is the pass k of
-//    `glaze render`), accumulated up to max_spp, with the per-pixel Monte-Carlo error.
+//    `glaze render`), accumulated up to max_spp, with the per-pixel Monte-Carlo error
+//    (passes are the path tracer's own: integrator.h says why).
 // The selected integrator is rendered first after every camera change: in sh mode the sh
 // image, then path passes; in path mode the first 8 passes, then the sh image (only for
 // a single convex object, where sh is exact), then the remaining passes. So switching is
@@ -28,12 +30,17 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 namespace glaze {
 
 enum class PreviewIntegrator { path, sh };
+
+// The integrator registered as `name` (integrator_registry.h); throws glaze::Error for an
+// unknown name or one the preview does not show.
+PreviewIntegrator preview_integrator(std::string_view name);
 
 // One published state; immutable once published.
 struct PreviewFrame {
@@ -89,6 +96,7 @@ class PreviewRenderer {
   const Environment& environment_;
   const PathTracer& path_;
   const PreviewRendererOptions options_;
+  const ShIntegrator sh_;
 
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;  // new request, or new frame, or idle

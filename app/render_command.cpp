@@ -1,25 +1,22 @@
 // render_command.cpp: `glaze render`: images of a glTF scene's cameras, or a capture
 // set (DESIGN §4) for the inverse module.
 #include "app/arguments.h"
-#include "app/timing.h"
 #include "app/commands.h"
 #include "app/scene_options.h"
 #include "renderer/capture_set.h"
 #include "renderer/display.h"
 #include "renderer/error.h"
-#include "renderer/path_tracer.h"
+#include "renderer/integrator_registry.h"
 #include "renderer/ray_tracer.h"
-#include "renderer/render.h"
 #include "renderer/scene.h"
-#include "renderer/sh_integrator.h"
 
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <set>
 #include <iostream>
 
@@ -52,48 +49,27 @@ struct Job {
   const Scene& scene;
   const EnvironmentSpec& environment_spec;
   const Environment& environment;
-  const RayTracer& ray_tracer;
-  const PathTracer& tracer;
-  RenderOptions options;
-  std::optional<ShIntegratorOptions> sh;  // set: the sh integrator, else the path tracer
+  const Integrator& integrator;
+  const IntegratorOptions& options;  // the integrator's, for the capture set's "renderer"
+  bool progress;                     // say which camera renders
   std::optional<std::pair<int, int>> resolution;
   DisplaySettings display;  // of a picture (.png, .jpg) instead of radiance
 
   void render_to(const CameraSpec& spec, const std::string& path) const {
     const PinholeCamera camera = scene.make_camera(spec, resolution);
-    if (options.progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
-    std::map<std::string, std::string> metadata = {{"glaze:camera", spec.name},
-                                                   {"glaze:scene", scene.path},
-                                                   {"glaze:environment", environment_spec.source},
-                                                   {"glaze:materials", materials_json(scene)}};
-    const auto start = std::chrono::steady_clock::now();
-    Image image;
-    std::string summary;
-    if (sh) {
-      image = render_sh(scene, ray_tracer, environment, camera, *sh);
-      metadata["glaze:integrator"] = "sh";
-      metadata["glaze:lmax"] = std::to_string(sh->lmax);
-      metadata["glaze:ss"] = std::to_string(sh->supersampling);
-      summary = "sh, lmax " + std::to_string(sh->lmax) + ", ss " + std::to_string(sh->supersampling);
-      if (sh->refined_supersampling > 0) {
-        metadata["glaze:ss_refined"] = std::to_string(sh->refined_supersampling);
-        summary += " refined " + std::to_string(sh->refined_supersampling);
-      }
-    } else {
-      // Each camera draws its own random streams (render.h): views of one set have
-      // independent noise.
-      RenderOptions view_options = options;
-      view_options.camera = uint64_t(&scene.camera(spec.name) - scene.cameras.data());
-      RenderResult result = render(tracer, camera, view_options);
-      image = std::move(result.image);
-      metadata["glaze:integrator"] = "path";
-      metadata["glaze:spp"] = std::to_string(result.spp);
-      metadata["glaze:seed"] = std::to_string(options.seed);
-      metadata["glaze:max_depth"] = std::to_string(tracer.max_depth());
-      summary = std::to_string(result.spp) + " spp";
-    }
-    const double seconds = seconds_since(start);
-    metadata["glaze:seconds"] = std::to_string(seconds);
+    if (progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
+    // Each camera draws its own random streams (render.h): views of one set have
+    // independent noise.
+    const uint64_t camera_index = uint64_t(&scene.camera(spec.name) - scene.cameras.data());
+    IntegratorResult result = integrator.render(camera, camera_index);
+    const Image& image = result.image;
+    const double seconds = result.seconds;
+    std::map<std::string, std::string> metadata = std::move(result.metadata);
+    metadata.insert({{"glaze:camera", spec.name},
+                     {"glaze:scene", scene.path},
+                     {"glaze:environment", environment_spec.source},
+                     {"glaze:materials", materials_json(scene)},
+                     {"glaze:seconds", std::to_string(seconds)}});
     if (is_picture(path)) {
       metadata["glaze:exposure"] = std::to_string(display.exposure_ev);
       metadata["glaze:tone_mapping"] = tone_mapping_name(display.tone_mapping);
@@ -101,7 +77,7 @@ struct Job {
     } else {
       write_image(path, image, metadata);
     }
-    std::cerr << "wrote " << path << " (" << summary << ", " << seconds << " s)\n";
+    std::cerr << "wrote " << path << " (" << result.summary << ", " << seconds << " s)\n";
   }
 };
 
@@ -148,8 +124,10 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 
   for (bool held_out : {false, true}) {
     CaptureSet set{{}, object, environment_entry, material};
-    set.renderer = job.sh ? nlohmann::json{{"integrator", "sh"}, {"ss", job.sh->supersampling}, {"lmax", job.sh->lmax}}
-                          : nlohmann::json{{"integrator", "path"}, {"spp", job.options.spp}};
+    const ShIntegratorOptions& sh = job.options.sh;
+    set.renderer = job.integrator.name() == ShIntegrator::kName
+                       ? nlohmann::json{{"integrator", "sh"}, {"ss", sh.supersampling}, {"lmax", sh.lmax}}
+                       : nlohmann::json{{"integrator", "path"}, {"spp", job.options.path_render.spp}};
     const std::filesystem::path folder = held_out ? root / "holdout" : root;
     set.environment["file"] = procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
                                          : environment_file.string();
@@ -174,7 +152,7 @@ int command_render(const std::vector<std::string>& raw) {
   if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
     throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
   const std::string integrator = args.text("integrator", "path");
-  if (integrator != "path" && integrator != "sh") throw Error("unknown integrator '" + integrator + "' (known: path, sh)");
+  require_integrator(integrator);
   if (integrator != "sh" && (args.has("lmax") || args.has("ss") || args.has("ss-refine")))
     throw Error("--lmax, --ss and --ss-refine apply to --integrator sh");
   // A capture set's pixels must have the one K x K footprint that the fits model
@@ -196,7 +174,6 @@ int command_render(const std::vector<std::string>& raw) {
   path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
   path_options.estimator = parse_direct_light_estimator(args.text("estimator", "mis"));
   path_options.black_background = args.has("captures");
-  const PathTracer tracer(scene, ray_tracer, environment, path_options);
 
   RenderOptions options;
   options.spp = static_cast<int>(args.integer("spp", 64, 1, 1 << 20));
@@ -208,19 +185,19 @@ int command_render(const std::vector<std::string>& raw) {
   if (args.has("time-budget") && !args.has("spp")) options.spp = 4;  // samples per pass
 
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  std::optional<ShIntegratorOptions> sh;
-  if (integrator == "sh") {
-    sh.emplace();
-    sh->lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
-    sh->supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
-    sh->refined_supersampling = static_cast<int>(args.integer("ss-refine", 0, 0, 64));
-    sh->black_background = args.has("captures");
-    sh->threads = options.threads;
-  }
+  ShIntegratorOptions sh;
+  sh.lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
+  sh.supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
+  sh.refined_supersampling = static_cast<int>(args.integer("ss-refine", 0, 0, 64));
+  sh.black_background = args.has("captures");
+  sh.threads = options.threads;
+  const IntegratorOptions integrator_options{path_options, options, sh};
+  const std::unique_ptr<Integrator> renderer =
+      make_integrator(integrator, scene, ray_tracer, environment, integrator_options);
   DisplaySettings display;
   display.exposure_ev = args.real("exposure", 0.0f);
   display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
-  const Job job{scene, spec, environment, ray_tracer, tracer, options, sh,
+  const Job job{scene, spec, environment, *renderer, integrator_options, options.progress,
                 args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt, display};
 
   if (args.has("captures")) {

@@ -1,12 +1,13 @@
 // footprint.h: which rays model an observation. A pixel records the mean radiance over
-// its area, so a pixel sample is modelled by `footprint` x `footprint` rays at the centres
-// of a grid over the pixel (the sh integrator's --ss positions); a point sample, read
-// bilinearly between four pixel centres, by the same bilinear blend of those pixels.
+// its area, so a pixel sample is modelled by `footprint` x `footprint` rays through the
+// sh integrator's sub-pixel points (pixel_grid.h, its --ss positions); a point sample,
+// read bilinearly between four pixel centres, by the same bilinear blend of those pixels.
 // The material fit and the lighting fit build their models from these rays, so that
 // both see a pixel the same way.
 #pragma once
 
 #include "inverse/samples.h"
+#include "renderer/pixel_grid.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,7 +53,8 @@ void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& 
       grid.clear();
       for (int j = 0; j < footprint; ++j)
         for (int i = 0; i < footprint; ++i)
-          grid.push_back(camera.generate_ray(px + (i + 0.5f) / footprint, py + (j + 0.5f) / footprint));
+          grid.push_back(
+              camera.generate_ray(pixel_grid_coordinate(px, i, footprint), pixel_grid_coordinate(py, j, footprint)));
       SurfaceHits hits;
       for (size_t first = 0; first < grid.size(); first += kLanes) {
         const int count = int(std::min(grid.size() - first, size_t(kLanes)));

@@ -11,6 +11,8 @@
 #include <limits>
 #include <cstdio>
 #include <mutex>
+#include <string>
+#include <utility>
 
 namespace glaze {
 namespace {
@@ -49,13 +51,15 @@ class ProgressBar {
 
 }  // namespace
 
-ProgressiveRender::ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options)
+ProgressiveRender::ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera,
+                                     const RenderOptions& options, uint64_t camera_index)
     : tracer_(tracer),
       camera_(camera),
       options_(options),
+      camera_index_(camera_index),
       arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
   if (options.spp < 1) throw Error("samples per pixel must be at least 1");
-  if (options.camera >= kCameraCount) throw Error("camera index " + std::to_string(options.camera) + " is too large");
+  if (camera_index >= kCameraCount) throw Error("camera index " + std::to_string(camera_index) + " is too large");
   const size_t pixels = size_t(camera.width) * camera.height;
   if (pixels >= (uint64_t(1) << kCameraShift)) throw Error("the image has too many pixels to render");
   sum_.assign(pixels * 3, 0.0);
@@ -87,7 +91,7 @@ bool ProgressiveRender::add_pass(const std::atomic<bool>* cancel, const std::fun
           // Two streams per pixel (PCG sequences 2i and 2i + 1, i its index among all
           // cameras' pixels): the scramble, one for all passes so that passes continue one
           // sequence, and the path samples.
-          const uint64_t stream = (options_.camera << kCameraShift) + pixel;
+          const uint64_t stream = (camera_index_ << kCameraShift) + pixel;
           Pcg32 scramble(options_.seed, 2 * stream);
           const uint32_t scramble_x = scramble.next_uint(), scramble_y = scramble.next_uint();
           Pcg32 rng(options_.seed * 0x9E3779B97F4A7C15ULL + uint64_t(pass), 2 * stream + 1);
@@ -149,8 +153,9 @@ std::vector<float> ProgressiveRender::relative_standard_error() const {
   return error;
 }
 
-RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options) {
-  ProgressiveRender passes(tracer, camera, options);
+RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options,
+                    uint64_t camera_index) {
+  ProgressiveRender passes(tracer, camera, options, camera_index);
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   do {
@@ -164,6 +169,19 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
   size_t non_finite = 0;
   result.image = passes.mean(&non_finite);
   if (non_finite > 0) warn(std::to_string(non_finite) + " pixel values were not finite and were set to 0");
+  return result;
+}
+
+IntegratorResult PathIntegrator::render_camera(const PinholeCamera& camera, uint64_t camera_index) const {
+  RenderResult rendered = glaze::render(tracer_, camera, options_, camera_index);
+  IntegratorResult result;
+  result.image = std::move(rendered.image);
+  result.seconds = rendered.seconds;
+  result.metadata = {{"glaze:integrator", std::string(kName)},
+                     {"glaze:spp", std::to_string(rendered.spp)},
+                     {"glaze:seed", std::to_string(options_.seed)},
+                     {"glaze:max_depth", std::to_string(tracer_.max_depth())}};
+  result.summary = std::to_string(rendered.spp) + " spp";
   return result;
 }
 

@@ -1,11 +1,12 @@
-// render.h: renders a camera's image with the path tracer, in parallel over tiles.
+// render.h: renders a camera's image with the path tracer, in parallel over tiles, and
+// that as an Integrator (integrator.h), PathIntegrator.
 //
 // Pixel filter: box. Each pixel is the mean of its samples, placed in the pixel's area
 // by a scrambled (0, 2)-sequence (low_discrepancy.h): for 2^m samples every elementary
 // interval of the pixel holds one, and passes of a time budget continue the sequence.
-// Every pixel draws from its own random streams, seeded by (seed, pass, camera, pixel
-// index), so the image depends only on the seed, the camera and the number of passes,
-// never on the thread count or the scheduling. The camera enters so that the views of
+// Every pixel draws from its own random streams, seeded by (seed, pass, camera index,
+// pixel index), so the image depends only on the seed, the camera and the number of
+// passes, never on the thread count or the scheduling. The camera enters so that the views of
 // one capture set carry independent noise, as photographs do: with streams keyed by the
 // pixel alone, the same pixel of two views drew the same numbers, and their noise was
 // correlated (measured: -0.16 to +0.22 between the three views of the white sphere in
@@ -14,6 +15,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/image.h"
+#include "renderer/integrator.h"
 #include "renderer/path_tracer.h"
 
 #include <tbb/task_arena.h>
@@ -34,7 +36,6 @@ struct RenderOptions {
   // Every sample through the pixel centre: no anti-aliasing, a point-sampled image (what
   // the sh integrator renders at ss 1), to compare shading models without pixel filtering.
   bool pixel_centres = false;
-  uint64_t camera = 0;          // the camera's index in its scene (see above)
 };
 
 struct RenderResult {
@@ -43,7 +44,9 @@ struct RenderResult {
   double seconds = 0.0;
 };
 
-RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options);
+// `camera_index`: the camera's index in its scene (see above).
+RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options,
+                    uint64_t camera_index = 0);
 
 // The passes behind render(), one at a time, for callers that show the image as it
 // refines (the preview window): pass k of `options.spp` samples per pixel is the same
@@ -52,7 +55,8 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
 // standard error of the running mean follows (passes are independent estimates).
 class ProgressiveRender {
  public:
-  ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options);
+  ProgressiveRender(const PathTracer& tracer, const PinholeCamera& camera, const RenderOptions& options,
+                    uint64_t camera_index = 0);
 
   // Renders the next pass and adds it. Returns false, adding nothing, when `cancel`
   // becomes true before the pass is complete (it is checked between tiles).
@@ -76,12 +80,32 @@ class ProgressiveRender {
   const PathTracer& tracer_;
   PinholeCamera camera_;
   RenderOptions options_;
+  uint64_t camera_index_;
   tbb::task_arena arena_;
   int passes_ = 0;
   std::vector<double> sum_;              // width * height * 3
   std::vector<double> luminance_sum_;    // per pixel: sum over passes of the pass mean's luminance
   std::vector<double> luminance_sq_sum_; // ... and of its square
   std::vector<double> pass_;             // the pass being rendered: its per-pixel sums
+};
+
+// render() as an Integrator: the path tracer of `scene` under `environment` with
+// `tracer_options`, rendering with `options`; its image, with the samples taken.
+class PathIntegrator final : public Integrator {
+ public:
+  static constexpr std::string_view kName = "path";
+
+  PathIntegrator(const Scene& scene, const RayTracer& tracer, const Environment& environment,
+                 const PathTracerOptions& tracer_options, const RenderOptions& options)
+      : tracer_(scene, tracer, environment, tracer_options), options_(options) {}
+
+  std::string_view name() const override { return kName; }
+
+ private:
+  IntegratorResult render_camera(const PinholeCamera& camera, uint64_t camera_index) const override;
+
+  PathTracer tracer_;
+  RenderOptions options_;
 };
 
 }  // namespace glaze

@@ -5,7 +5,7 @@
 //
 // per sub-pixel sample: one ray cast through the scene's Embree geometry, one
 // environment lookup along the mirror direction, and the SH diffuse sum. No Monte-Carlo
-// noise: K x K sub-pixel samples (centres of a K x K grid, box filter) only against
+// noise: K x K sub-pixel samples (centres of a K x K grid, box filter: pixel_grid.h) only against
 // aliasing at silhouettes and in sharp reflections, optionally M x M where those K x K
 // disagree (the few pixels with an edge in them get the samples). It is exact for a single convex
 // object under distant light up to the SH truncation of the diffuse term; elsewhere it
@@ -16,6 +16,7 @@
 #include "renderer/camera.h"
 #include "renderer/environment.h"
 #include "renderer/image.h"
+#include "renderer/integrator.h"
 #include "renderer/ray_tracer.h"
 #include "renderer/scene.h"
 
@@ -37,5 +38,25 @@ struct ShIntegratorOptions {
 
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,
                 const PinholeCamera& camera, const ShIntegratorOptions& options);
+
+// render_sh as an Integrator (integrator.h): its image, timed, with its parameters.
+class ShIntegrator final : public Integrator {
+ public:
+  static constexpr std::string_view kName = "sh";
+
+  ShIntegrator(const Scene& scene, const RayTracer& tracer, const Environment& environment,
+               const ShIntegratorOptions& options)
+      : scene_(scene), tracer_(tracer), environment_(environment), options_(options) {}
+
+  std::string_view name() const override { return kName; }
+
+ private:
+  IntegratorResult render_camera(const PinholeCamera& camera, uint64_t camera_index) const override;
+
+  const Scene& scene_;
+  const RayTracer& tracer_;
+  const Environment& environment_;
+  ShIntegratorOptions options_;
+};
 
 }  // namespace glaze

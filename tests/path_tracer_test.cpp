@@ -274,8 +274,7 @@ TEST(Render, EachCameraDrawsItsOwnStreams) {
     RenderOptions options;
     options.spp = 4;
     options.seed = seed;
-    options.camera = camera_index;
-    return render(path_tracer, camera, options).image;
+    return render(path_tracer, camera, options, camera_index).image;
   };
   const Image first = image(7, 0), other_camera = image(7, 1), other_seed = image(8, 0);
   EXPECT_EQ(other_camera.pixels, image(7, 1).pixels);  // deterministic

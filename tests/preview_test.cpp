@@ -6,6 +6,7 @@
 #include "app/preview_renderer.h"
 #include "renderer/display.h"
 #include "renderer/environment.h"
+#include "renderer/error.h"
 #include "renderer/image.h"
 #include "renderer/path_tracer.h"
 #include "renderer/procedural_environment.h"
@@ -193,6 +194,12 @@ TEST(PreviewRenderer, PathFirstRendersPassesBeforeTheShImage) {
   }
   frame = renderer.wait_newer(frame->version);
   EXPECT_EQ(frame->sh_ss, options.sh.supersampling);  // then the sh image, in the background
+}
+
+TEST(PreviewRenderer, ShowsTheRegisteredPathAndShIntegrators) {
+  EXPECT_EQ(preview_integrator("path"), PreviewIntegrator::path);
+  EXPECT_EQ(preview_integrator("sh"), PreviewIntegrator::sh);
+  EXPECT_THROW(preview_integrator("photon"), Error);
 }
 
 // ---- The window, under Xvfb ----------------------------------------------------------
