@@ -1,17 +1,31 @@
-// commands.h: the glaze subcommands that live outside main.cpp.
+// commands.h: the glaze commands. Each declares its command line on a CLI11 app
+// (command_line.h) and returns how it runs with it; command_NAME runs one on an argument
+// list, as `demo` and `reproduce` do for the steps they take.
 #pragma once
+
+#include "app/command_line.h"
 
 #include <string>
 #include <vector>
 
 namespace glaze {
 
-int command_demo(const std::vector<std::string>& args);
-int command_render(const std::vector<std::string>& args);
-int command_convergence(const std::vector<std::string>& args);
-int command_invert_fit(const std::vector<std::string>& args);
-int command_preview(const std::vector<std::string>& args);
-int command_reproduce(const std::vector<std::string>& args);
+CommandRun declare_demo(CLI::App& app);         // demo_command.cpp
+CommandRun declare_sh(CLI::App& app);           // environment_commands.cpp
+CommandRun declare_env(CLI::App& app);          // environment_commands.cpp
+CommandRun declare_render(CLI::App& app);       // render_command.cpp
+CommandRun declare_convergence(CLI::App& app);  // convergence_command.cpp
+CommandRun declare_invert_fit(CLI::App& app);   // invert_command.cpp
+CommandRun declare_preview(CLI::App& app);      // preview_command.cpp, built with GLAZE_PREVIEW
+CommandRun declare_reproduce(CLI::App& app);    // reproduce_command.cpp
+
+inline int command_render(const std::vector<std::string>& args) { return run_command("render", declare_render, args); }
+inline int command_convergence(const std::vector<std::string>& args) {
+  return run_command("convergence", declare_convergence, args);
+}
+inline int command_invert_fit(const std::vector<std::string>& args) {
+  return run_command("invert-fit", declare_invert_fit, args);
+}
 
 // What `glaze preview` and `invert-fit --preview` say in a build without the window.
 inline constexpr const char* kNoPreview =

@@ -7,11 +7,10 @@
 // the mean squared differences of independent errors add). Times are wall-clock seconds
 // of the render alone (all threads); for the sh integrator they include the SH
 // projection of the environment for that lmax, which a fresh process pays once.
-#include "app/arguments.h"
-#include "app/timing.h"
 #include "app/commands.h"
 #include "app/plot.h"
-#include "app/scene_options.h"
+#include "app/shared_options.h"
+#include "app/timing.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
 #include "renderer/path_tracer.h"
@@ -29,10 +28,25 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <thread>
 
 namespace glaze {
 namespace {
+
+struct ConvergenceCommandOptions {
+  std::string scene, out;
+  std::optional<std::string> camera;
+  std::optional<Resolution> resolution;
+  std::optional<std::string> reference;  // --ref FILE.exr, instead of rendering it
+  float reference_noise = 0.0f;
+  long reference_spp = 16384;
+  std::optional<long> max_spp;
+  uint64_t seed = 0;
+  int threads = 0;
+  int max_depth = 8;
+  EnvironmentOverride environment;
+};
 
 constexpr int kShLmax[] = {2, 4, 6, 8, 12};
 // Sub-pixel sampling of the sh rows: K x K everywhere, and K x K refined to M x M where
@@ -84,32 +98,24 @@ const Row* fastest_sh_within(const std::vector<Row>& rows, double target) {
   return best;
 }
 
-}  // namespace
-
-int command_convergence(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"camera", "res", "ref", "ref-noise", "ref-spp", "max-spp", "seed", "threads", "max-depth",
-                             "env", "env-scale", "env-rotation", "out"});
-  if (args.positionals().size() != 1 || !args.has("out"))
-    throw Error("usage: glaze convergence SCENE [--camera NAME] [--ref FILE.exr | --ref-spp N] --out DIR");
-  if (args.has("ref") && args.has("ref-spp")) throw Error("give either --ref FILE.exr or --ref-spp N, not both");
-  if (args.has("ref-noise") && !args.has("ref")) throw Error("--ref-noise describes a loaded --ref FILE.exr");
-
-  const Scene scene = load_scene(args.positionals()[0]);
-  const EnvironmentSpec spec = environment_spec(scene, args);
+int convergence(const ConvergenceCommandOptions& args) {
+  const Scene scene = load_scene(args.scene);
+  const EnvironmentSpec spec = environment_spec(scene, args.environment);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  const PinholeCamera camera = scene.make_camera(scene.camera(args.text("camera", scene.cameras.front().name)),
-                                                 args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt);
+  const PinholeCamera camera =
+      scene.make_camera(scene.camera(args.camera.value_or(scene.cameras.front().name)),
+                        args.resolution ? std::optional(args.resolution->pair()) : std::nullopt);
   const std::vector<uint8_t> mask = interior_mask(ray_tracer, camera);
-  const std::filesystem::path out(args.text("out", ""));
+  const std::filesystem::path out(args.out);
   std::filesystem::create_directories(out);
 
   PathTracerOptions path_options;
-  path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
+  path_options.max_depth = args.max_depth;
   RenderOptions options;
-  options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
-  options.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
+  options.seed = args.seed;
+  options.threads = args.threads;
   auto render_path = [&](const RenderOptions& passes) {
     return PathIntegrator(scene, ray_tracer, environment, path_options, passes).render(camera);
   };
@@ -117,19 +123,19 @@ int command_convergence(const std::vector<std::string>& raw) {
   // The reference, and its own noise when glaze renders it.
   Image reference;
   double reference_noise = 0.0, reference_seconds = 0.0;
-  const long reference_spp = args.has("ref") ? 0 : args.integer("ref-spp", 16384, 2, 1L << 24);
-  const long max_spp = args.integer("max-spp", reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024, 1, 1L << 20);
+  const long reference_spp = args.reference ? 0 : args.reference_spp;
+  const long max_spp = args.max_spp.value_or(reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024);
   if (reference_spp > 0 && max_spp > reference_spp / 4)
     throw Error("--max-spp " + std::to_string(max_spp) + " is too close to the reference's " + std::to_string(reference_spp) +
                 " spp: errors against it would mostly measure the reference's own noise; use at most --ref-spp / 4 (" +
                 std::to_string(reference_spp / 4) + ") or raise --ref-spp");
-  if (args.has("ref")) {
-    reference = read_image(args.text("ref", ""));
+  if (args.reference) {
+    reference = read_image(*args.reference);
     // Its own relative RMSE, as an earlier run measured it (0: taken as exact).
-    reference_noise = args.real("ref-noise", 0.0f);
+    reference_noise = args.reference_noise;
     if (!(reference_noise >= 0.0 && reference_noise < 1.0)) throw Error("--ref-noise must be a relative RMSE in [0, 1)");
     if (reference.width != camera.width || reference.height != camera.height)
-      throw Error(args.text("ref", "") + ": the reference is " + std::to_string(reference.width) + "x" +
+      throw Error(*args.reference + ": the reference is " + std::to_string(reference.width) + "x" +
                   std::to_string(reference.height) + " but camera " + camera.name + " renders " +
                   std::to_string(camera.width) + "x" + std::to_string(camera.height) + " (match it with --res)");
   } else {
@@ -284,6 +290,36 @@ int command_convergence(const std::vector<std::string>& raw) {
   write_loglog_plot((out / "convergence.png").string(), plot);
   std::cerr << "wrote " << (out / "convergence.csv").string() << ", split.csv, summary.json, convergence.png\n";
   return 0;
+}
+
+}  // namespace
+
+CommandRun declare_convergence(CLI::App& app) {
+  auto args = std::make_shared<ConvergenceCommandOptions>();
+  app.description("error against run time of the path tracer and the sh integrator, against one reference");
+  add_scene(app, args->scene);
+  add_text(app, "--out DIR", args->out, "where the study goes")->required();
+  add_camera(app, args->camera, "which camera (default: the first)");
+  add_film_resolution(app, args->resolution);
+  CLI::Option* reference_spp =
+      add_integer(app, "--ref-spp N", args->reference_spp, 2, 1 << 24,
+                  "path-trace the reference at N spp, in two halves whose difference measures its noise");
+  CLI::Option* reference = add_text(app, "--ref FILE.exr", args->reference, "use this reference instead");
+  reference->excludes(reference_spp);
+  add_real(app, "--ref-noise X", args->reference_noise,
+           "the relative noise of --ref, as summary.json of the run that made it says (in [0, 1))")
+      ->needs(reference);
+  add_integer(app, "--max-spp N", args->max_spp, 1, 1 << 20,
+              "path tracer at 1, 2, 4, ... N spp (default ref-spp / 16)");
+  add_seed(app, args->seed, "random seed of the path tracer");
+  add_threads(app, args->threads);
+  add_max_depth(app, args->max_depth);
+  add_environment_override(app, args->environment);
+  app.footer("Writes DIR/convergence.csv (seconds, relative RMSE, max error, RMSE beyond the reference noise),\n"
+             "split.csv (sh error from SH truncation and from anti-aliasing, kernel energy kept per lmax),\n"
+             "summary.json (time to 1% and 0.3%) and convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12\n"
+             "x ss 1, 2, 4, and ss 1 and 2 refined to 8 (--ss-refine 8).");
+  return [args] { return convergence(*args); };
 }
 
 }  // namespace glaze

@@ -3,9 +3,9 @@
 // embedded at build time) is path-traced into a capture set (three views, two held
 // out), fitted with `invert-fit --mode material`, and the recovered material is printed
 // against the true one. It runs the same commands a user would, in DIR.
-#include "app/arguments.h"
 #include "app/commands.h"
 #include "app/embedded_scene.h"
+#include "app/shared_options.h"
 #include "renderer/error.h"
 
 #include <nlohmann/json.hpp>
@@ -13,12 +13,19 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 namespace glaze {
+namespace {
 
-int command_demo(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"out", "spp", "res"});
-  const std::filesystem::path out(args.text("out", "glaze-demo"));
+struct DemoCommandOptions {
+  std::string out = "glaze-demo";
+  int spp = 64;
+  Resolution resolution{256, 256};
+};
+
+int demo(const DemoCommandOptions& args) {
+  const std::filesystem::path out(args.out);
   std::filesystem::create_directories(out);
   const std::string scene = (out / kEmbeddedSceneName).string();
   {
@@ -29,8 +36,8 @@ int command_demo(const std::vector<std::string>& raw) {
   const std::string captures = (out / "captures").string(), fit = (out / "fit").string();
   std::printf("glaze demo: the red sphere in procedural:office (%s)\n\n1. path-traced captures -> %s\n", scene.c_str(),
               captures.c_str());
-  command_render({scene, "--captures", captures, "--holdout", "novel_0,novel_1", "--spp", args.text("spp", "64"), "--res",
-                  args.text("res", "256x256")});
+  command_render({scene, "--captures", captures, "--holdout", "novel_0,novel_1", "--spp", std::to_string(args.spp),
+                  "--res", to_string(args.resolution)});
   std::printf("\n2. invert-fit --mode material -> %s\n", fit.c_str());
   std::fflush(stdout);
   command_invert_fit({captures + "/transforms.json", "--mode", "material", "--out", fit});
@@ -50,6 +57,18 @@ int command_demo(const std::vector<std::string>& raw) {
   for (const auto& view : result["holdout"]) std::printf(" %.4f", view["relative_rmse"].is_null() ? NAN : view["relative_rmse"].get<double>());
   std::printf("\n  images: the captures in %s, re-renders and residuals in %s\n", captures.c_str(), fit.c_str());
   return 0;
+}
+
+}  // namespace
+
+CommandRun declare_demo(CLI::App& app) {
+  auto args = std::make_shared<DemoCommandOptions>();
+  app.description("the embedded default, end to end: captures of the red sphere in the procedural office,\n"
+                  "fitted, recovered against true material");
+  add_text(app, "--out DIR", args->out, "where the captures and the fit go");
+  add_spp(app, args->spp, "samples per pixel of the captures");
+  add_resolution(app, "--res WxH", args->resolution, "size of the captures");
+  return [args] { return demo(*args); };
 }
 
 }  // namespace glaze

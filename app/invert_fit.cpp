@@ -62,17 +62,13 @@ nlohmann::json drops_json(const DropCounts& d) {
 }
 
 
-FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds) {
+FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds) {
   FitInputs in;
-  in.captures = read_transforms(args.positionals()[0]);
+  in.captures = read_transforms(args.captures);
   in.scene = capture_object_scene(in.captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   in.tracer = std::make_unique<RayTracer>(in.scene);
-  SampleOptions sample_options;
-  sample_options.min_cos = args.real("min-cos", sample_options.min_cos);
-  sample_options.points = static_cast<int>(args.integer("points", 0, 0, 1 << 26));
-  sample_options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, 1L << 40));
   const auto stage = Clock::now();
-  in.samples = collect_samples(in.captures, *in.tracer, in.scene, sample_options);
+  in.samples = collect_samples(in.captures, *in.tracer, in.scene, args.samples);
   stage_seconds["samples"] = seconds_since(stage);
   const DropCounts dropped = in.samples.total_dropped();
   std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
@@ -86,12 +82,13 @@ void write_fit(const std::filesystem::path& out, const nlohmann::json& result, c
   write_text_atomically((out / "fit.json").string(), result.dump(2) + "\n");
 }
 
-void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
-                   int footprint, const std::filesystem::path& out, nlohmann::json& result) {
+void write_renders(const InvertFitOptions& args, const FitInputs& in, const Scene& scene,
+                   const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
+                   nlohmann::json& result) {
   result["renders"] = rerender(in.captures.frames, scene, *in.tracer, environment, lmax, footprint, out, "view");
-  const std::filesystem::path holdout = args.has("holdout-dir") ? std::filesystem::path(args.text("holdout-dir", ""))
-                                                                : std::filesystem::path(in.captures.directory) / "holdout";
-  if (args.has("holdout-dir") || std::filesystem::exists(holdout / "transforms.json")) {
+  const std::filesystem::path holdout = args.holdout_dir ? std::filesystem::path(*args.holdout_dir)
+                                                         : std::filesystem::path(in.captures.directory) / "holdout";
+  if (args.holdout_dir || std::filesystem::exists(holdout / "transforms.json")) {
     const CaptureSet held_out = read_transforms(holdout.string());
     result["holdout"] = rerender(held_out.frames, scene, *in.tracer, environment, lmax, footprint, out, "holdout");
   }

@@ -2,10 +2,10 @@
 // mode starts from (capture set, object, samples), the defaults that match how the
 // captures were rendered, the outputs (fit.json, re-renders, residual images), and the
 // hooks of --preview. The modes live in invert_material.cpp (material, texture) and
-// invert_lighting.cpp (lighting, joint); invert_command.cpp parses the command line.
+// invert_lighting.cpp (lighting, joint); invert_command.cpp declares the command line.
 #pragma once
 
-#include "app/arguments.h"
+#include "app/shared_options.h"
 #include "app/timing.h"
 #include "inverse/fit_progress.h"
 #include "inverse/samples.h"
@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,6 +30,35 @@ namespace glaze {
 class FitPreview;  // app/fit_preview.h (built with GLAZE_PREVIEW)
 
 namespace invert_fit {
+
+// The command line of `glaze invert-fit` (declared in invert_command.cpp). Options left
+// empty take defaults that depend on the mode or on how the captures were rendered.
+struct InvertFitOptions {
+  std::string captures;  // CAPTURES/transforms.json, or its folder
+  std::string mode;      // material, texture, lighting or joint
+  std::string out;
+  SampleOptions samples;  // --min-cos, --points, --seed
+  std::optional<int> lmax, pixel_footprint, max_iterations;
+  EnvironmentOverride environment;  // the known lighting of material and texture
+  std::optional<std::string> holdout_dir;
+  int threads = 0;
+  // --mode material and texture.
+  std::string loss = "none";
+  float loss_scale = 0.05f;
+  Resolution texture_resolution{256, 128};
+  // --mode lighting and joint.
+  std::optional<float> R0;
+  std::vector<float> Rd;  // r, g, b; empty: the capture set's
+  Resolution lighting_resolution{256, 128};
+  std::optional<Resolution> solve_resolution;
+  std::optional<float> ridge;
+  int diffuse_lmax = 16;
+  std::optional<int> max_passes;
+  // --preview.
+  bool preview = false;
+  WindowOptions window;
+  DisplaySettings display;
+};
 
 nlohmann::json rgb_json(const RGB& c);
 nlohmann::json drops_json(const DropCounts& d);
@@ -41,7 +71,7 @@ struct FitInputs {
   std::unique_ptr<RayTracer> tracer;
   SampleSet samples;
 };
-FitInputs prepare_inputs(const Arguments& args, nlohmann::json& stage_seconds);
+FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds);
 
 // Writes fit.json (and the solver's report) atomically.
 void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report);
@@ -49,8 +79,9 @@ void write_fit(const std::filesystem::path& out, const nlohmann::json& result, c
 // Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout-dir) with
 // `scene`'s material under `environment`, with residual images; per-view figures go to
 // result["renders"] and result["holdout"].
-void write_renders(const Arguments& args, const FitInputs& in, const Scene& scene, const Environment& environment, int lmax,
-                   int footprint, const std::filesystem::path& out, nlohmann::json& result);
+void write_renders(const InvertFitOptions& args, const FitInputs& in, const Scene& scene,
+                   const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
+                   nlohmann::json& result);
 
 // Defaults that match how glaze rendered the captures, when transforms.json says: the sh
 // integrator's K x K sub-pixel grid is exactly a footprint of K, and its lmax is the
@@ -82,8 +113,9 @@ struct FinishPreview {
 };
 
 // The modes. `preview` may be null.
-int invert_material(const Arguments& args, const std::filesystem::path& out, const std::string& mode, FitPreview* preview);
-int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint, FitPreview* preview);
+int invert_material(const InvertFitOptions& args, const std::filesystem::path& out, const std::string& mode,
+                    FitPreview* preview);
+int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out, bool joint, FitPreview* preview);
 
 }  // namespace invert_fit
 }  // namespace glaze

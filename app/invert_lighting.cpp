@@ -20,21 +20,17 @@ namespace glaze::invert_fit {
 namespace {
 
 // The known material of --mode lighting: --R0 and --Rd, else the capture set's.
-PolishedMaterial known_material(const Arguments& args, const CaptureSet& captures) {
+PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& captures) {
   float R0 = -1.0f;
   RGB Rd = RGB::Constant(-1.0f);
   if (captures.material.contains("R0")) R0 = captures.material["R0"].get<float>();
   if (captures.material.contains("Rd"))
     for (int c = 0; c < 3; ++c) Rd[c] = captures.material["Rd"][c].get<float>();
-  R0 = args.real("R0", R0);
-  if (args.has("Rd")) {
-    const std::vector<float> values = args.reals("Rd");
-    if (values.size() != 3) throw Error("option --Rd needs three comma-separated numbers r,g,b");
-    Rd = RGB(values[0], values[1], values[2]);
-  }
+  R0 = args.R0.value_or(R0);
+  if (!args.Rd.empty()) Rd = RGB(args.Rd[0], args.Rd[1], args.Rd[2]);
   if (R0 < 0.0f || (Rd < 0.0f).any()) {
-    const std::string missing = R0 < 0.0f ? (args.has("R0") ? "--R0 is negative" : "R0 is not given")
-                                          : (args.has("Rd") ? "--Rd is negative" : "Rd is not given");
+    const std::string missing = R0 < 0.0f ? (args.R0 ? "--R0 is negative" : "R0 is not given")
+                                          : (!args.Rd.empty() ? "--Rd is negative" : "Rd is not given");
     throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.directory +
                 "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
   }
@@ -45,16 +41,17 @@ PolishedMaterial known_material(const Arguments& args, const CaptureSet& capture
 
 // --mode lighting: the lighting from an object of known material; --mode joint: the
 // material and the lighting together.
-int invert_lighting(const Arguments& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
+int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
-  const int lmax = static_cast<int>(args.integer("lmax", 4, 0, 8));
-  const int footprint = static_cast<int>(args.integer("pixel-footprint", capture_defaults(in.captures, 4).first, 1, 16));
+  const int lmax = args.lmax.value_or(4);
+  const int footprint = args.pixel_footprint.value_or(capture_defaults(in.captures, 4).first);
   LightingFitOptions options;
-  std::tie(options.width, options.height) = args.resolution("env-res", {256, 128});
-  options.ridge = args.real("ridge", float(options.ridge));
-  std::tie(options.solve_width, options.solve_height) = args.resolution("solve-res", {options.solve_width, options.solve_height});
+  std::tie(options.width, options.height) = args.lighting_resolution.pair();
+  options.ridge = args.ridge.value_or(float(options.ridge));
+  std::tie(options.solve_width, options.solve_height) =
+      args.solve_resolution.value_or(Resolution{options.solve_width, options.solve_height}).pair();
 
   auto stage = Clock::now();
   // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact for
@@ -66,7 +63,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
   const int capture_lmax = capture_defaults(in.captures, kShMaxLmax + 1).second;
   const bool band_limited = capture_lmax <= lmax;
   const int diffuse_lmax =
-      band_limited ? lmax : std::min(capture_lmax, static_cast<int>(args.integer("diffuse-lmax", 16, 0, kShMaxLmax)));
+      band_limited ? lmax : std::min(capture_lmax, args.diffuse_lmax);
   LightingData data =
       gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint, noise_free_captures(in.captures));
   stage_seconds["gather"] = seconds_since(stage);
@@ -86,8 +83,8 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
       show_in_preview(preview, in.scene, it.R0, it.Rd, [lighting] { return lighting; }, iterate_label(it));
     };
   if (joint) {
-    joint_options.max_rounds = static_cast<int>(args.integer("max-iterations", joint_options.max_rounds, 1, 10000));
-    joint_options.max_passes = static_cast<int>(args.integer("max-passes", joint_options.max_passes, 1, 100));
+    joint_options.max_rounds = args.max_iterations.value_or(joint_options.max_rounds);
+    joint_options.max_passes = args.max_passes.value_or(joint_options.max_passes);
     joint_options.band_limited_diffuse = band_limited;
     joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
   }

@@ -18,7 +18,8 @@
 namespace glaze::invert_fit {
 
 // --mode material and texture: the material under known lighting.
-int invert_material(const Arguments& args, const std::filesystem::path& out, const std::string& mode, FitPreview* preview) {
+int invert_material(const InvertFitOptions& args, const std::filesystem::path& out, const std::string& mode,
+                    FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
 
@@ -29,29 +30,30 @@ int invert_material(const Arguments& args, const std::filesystem::path& out, con
   const RayTracer& tracer = *in.tracer;
   const SampleSet& samples = in.samples;
   std::optional<EnvironmentSpec> spec = capture_environment(captures);
-  if (args.has("env")) spec = EnvironmentSpec{args.text("env", ""), spec ? spec->options : EnvironmentOptions{}};
+  if (args.environment.source)
+    spec = EnvironmentSpec{*args.environment.source, spec ? spec->options : EnvironmentOptions{}};
   if (!spec)
     throw Error(captures.directory + "/transforms.json names no environment: --mode " + mode +
                 " needs the lighting; give --env FILE|procedural:NAME");
-  spec->options.scale = args.real("env-scale", spec->options.scale);
-  spec->options.rotation_degrees = args.real("env-rotation", spec->options.rotation_degrees);
+  spec->options.scale = args.environment.scale.value_or(spec->options.scale);
+  spec->options.rotation_degrees = args.environment.rotation_degrees.value_or(spec->options.rotation_degrees);
   const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);
   const DropCounts dropped = samples.total_dropped();
 
   // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
   // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
   const auto [default_footprint, default_lmax] = capture_defaults(captures, 16);
-  const int lmax = static_cast<int>(args.integer("lmax", default_lmax, 0, kShMaxLmax));
+  const int lmax = args.lmax.value_or(default_lmax);
   auto stage = Clock::now();
-  const int footprint = static_cast<int>(args.integer("pixel-footprint", default_footprint, 1, 16));
+  const int footprint = args.pixel_footprint.value_or(default_footprint);
   const std::vector<ShadingTerms> terms = shading_terms(samples, captures, tracer, environment, lmax, footprint);
   stage_seconds["shading_terms"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
   const FinishPreview finish_preview{preview};
 
   MaterialFitOptions fit_options;
-  fit_options.loss = RobustLoss::parse(args.text("loss", "none"), args.real("loss-scale", 0.05f));
-  fit_options.max_iterations = static_cast<int>(args.integer("max-iterations", 100, 1, 10000));
+  fit_options.loss = RobustLoss::parse(args.loss, args.loss_scale);
+  fit_options.max_iterations = args.max_iterations.value_or(100);
   if (preview)
     fit_options.observer = [&](const FitIterate& it) {
       show_in_preview(preview, scene, it.R0, it.Rd, borrowed(environment), iterate_label(it));
@@ -59,7 +61,7 @@ int invert_material(const Arguments& args, const std::filesystem::path& out, con
   stage = Clock::now();
   MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
   std::filesystem::create_directories(out);
-  nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.text("loss", "none")},
+  nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.loss},
                            {"pixel_footprint", footprint}};
   std::optional<RecoveredTexture> texture;
   if (mode == "material") {
@@ -75,7 +77,7 @@ int invert_material(const Arguments& args, const std::filesystem::path& out, con
              std::to_string(fit.R0) + "); it is reported as 0");
     }
   } else {
-    const auto [width, height] = args.resolution("texture-res", {256, 128});
+    const auto [width, height] = args.texture_resolution;
     result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
     fit_options.observer = nullptr;  // its per-texel iterates are not one material to show
     texture = fit_texture(samples.samples, terms, width, height, fit, fit_options);

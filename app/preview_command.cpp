@@ -2,13 +2,12 @@
 // renders (preview_renderer.h), with orbit/pan/zoom, integrator, exposure, tone mapping
 // and false-colour views, and saving. Headless: --frames N [--screenshot FILE.png]
 // shows N published steps in lockstep (the same image every run) and exits.
-#include "app/arguments.h"
-#include "app/timing.h"
 #include "app/commands.h"
 #include "app/orbit_camera.h"
 #include "app/preview_renderer.h"
 #include "app/preview_window.h"
-#include "app/scene_options.h"
+#include "app/shared_options.h"
+#include "app/timing.h"
 #include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/path_tracer.h"
@@ -23,6 +22,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <numbers>
 
 namespace glaze {
@@ -40,6 +40,23 @@ constexpr const char* kKeyHelp = R"(glaze preview keys:
   H / F1               this help               Q / Esc   quit
 )";
 
+
+struct PreviewCommandOptions {
+  std::string scene;
+  std::optional<std::string> camera;
+  std::optional<Resolution> resolution;
+  std::optional<std::string> integrator;  // default: sh for a single convex object, else path
+  int lmax = 4, supersampling = 2;
+  uint64_t seed = 0;
+  int threads = 0;
+  int max_depth = 8;
+  EnvironmentOverride environment;
+  DisplaySettings display;
+  int max_spp = 4096;
+  WindowOptions window;
+  float spin_degrees = 0.0f;
+  std::string save_dir = ".";
+};
 
 enum class FalseColour { off, relative_error, n_dot_v };
 
@@ -114,50 +131,39 @@ std::string title(const std::string& camera, const PreviewFrame* frame, const Vi
   return text;
 }
 
-}  // namespace
-
-int command_preview(const std::vector<std::string>& raw) {
+int preview(const PreviewCommandOptions& args) {
   const auto launch = Clock::now();
-  const Arguments args(raw, {"camera", "res", "integrator", "lmax", "ss", "seed", "threads", "max-depth", "env", "env-scale",
-                             "env-rotation", "exposure", "tone-map", "max-spp", "frames", "screenshot", "spin", "save-dir"});
-  if (args.positionals().size() != 1) throw Error("usage: glaze preview SCENE [--camera NAME] [--integrator path|sh] (see `glaze help`)");
-  if (args.has("screenshot") && !args.has("frames")) throw Error("--screenshot needs --frames N (the frame to capture)");
-  const int frames = static_cast<int>(args.integer("frames", 0, 1, 1 << 20));
-  const std::string screenshot = args.text("screenshot", "");
-  if (!screenshot.empty() && std::filesystem::path(screenshot).extension() != ".png")
-    throw Error("--screenshot " + screenshot + ": the screenshot is a PNG (name it FILE.png)");
-  const float spin = args.real("spin", 0.0f) * std::numbers::pi_v<float> / 180.0f;
-  DisplaySettings display;
-  display.exposure_ev = args.real("exposure", 0.0f);
-  display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
+  const int frames = args.window.frames;
+  const std::string& screenshot = args.window.screenshot;
+  const float spin = args.spin_degrees * std::numbers::pi_v<float> / 180.0f;
   require_display("glaze render");  // before any loading: no display fails at once
 
-  const Scene scene = load_scene(args.positionals()[0]);
+  const Scene scene = load_scene(args.scene);
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  const std::string first_camera = args.text("camera", scene.cameras.front().name);
+  const std::string first_camera = args.camera.value_or(scene.cameras.front().name);
   scene.camera(first_camera);  // an unknown name lists the cameras
   ViewState view;
-  view.display = display;
-  const std::string integrator_name = args.text("integrator", scene.is_single_convex_object() ? "sh" : "path");
+  view.display = args.display;
+  const std::string integrator_name = args.integrator.value_or(scene.is_single_convex_object() ? "sh" : "path");
   view.integrator = preview_integrator(integrator_name);
 
-  const EnvironmentSpec spec = environment_spec(scene, args);
+  const EnvironmentSpec spec = environment_spec(scene, args.environment);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
   PathTracerOptions path_options;
-  path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
+  path_options.max_depth = args.max_depth;
   const PathTracer tracer(scene, ray_tracer, environment, path_options);
 
   PreviewRendererOptions options;
-  options.sh.lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
-  options.sh.supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
-  options.sh.threads = options.path.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
-  options.path.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, std::numeric_limits<long>::max()));
-  options.max_spp = static_cast<int>(args.integer("max-spp", 4096, 1, 1 << 24));
+  options.sh.lmax = args.lmax;
+  options.sh.supersampling = args.supersampling;
+  options.sh.threads = options.path.threads = args.threads;
+  options.path.seed = args.seed;
+  options.max_spp = args.max_spp;
   options.lockstep = frames > 0;
   const std::optional<std::pair<int, int>> resolution =
-      args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt;
-  const std::filesystem::path save_dir = args.text("save-dir", ".");
+      args.resolution ? std::optional(args.resolution->pair()) : std::nullopt;
+  const std::filesystem::path save_dir = args.save_dir;
 
   size_t camera_index = 0;
   while (scene.cameras[camera_index].name != first_camera) ++camera_index;
@@ -212,7 +218,7 @@ int command_preview(const std::vector<std::string>& raw) {
         break;
       case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: view.display.exposure_ev += 1.0f; break;
       case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: view.display.exposure_ev -= 1.0f; break;
-      case GLFW_KEY_0: case GLFW_KEY_KP_0: view.display.exposure_ev = args.real("exposure", 0.0f); break;
+      case GLFW_KEY_0: case GLFW_KEY_KP_0: view.display.exposure_ev = args.display.exposure_ev; break;
       case GLFW_KEY_T: view.display.tone_mapping = ToneMapping((int(view.display.tone_mapping) + 1) % 3); break;
       case GLFW_KEY_F: view.false_colour = FalseColour((int(view.false_colour) + 1) % 3); break;
       case GLFW_KEY_S:
@@ -294,6 +300,33 @@ int command_preview(const std::vector<std::string>& raw) {
                  frame->path_spp * double(frame->camera.width) * frame->camera.height / frame->path_seconds / 1e6);
   std::fprintf(stderr, "\n");
   return 0;
+}
+
+}  // namespace
+
+CommandRun declare_preview(CLI::App& app) {
+  auto args = std::make_shared<PreviewCommandOptions>();
+  app.description("a window that shows the render as it refines; orbit, pan, zoom, exposure, tone mapping\n"
+                  "(press H in the window for the keys)");
+  add_scene(app, args->scene);
+  add_camera(app, args->camera, "the camera to start from (default: the first)");
+  add_film_resolution(app, args->resolution);
+  add_integrator(app, args->integrator,
+             "shown first (default: sh for a single convex object, else path); the other follows in the\n"
+             "background (key I switches)");
+  add_lmax(app, args->lmax, "SH band limit of the sh integrator's diffuse term");
+  add_supersampling(app, args->supersampling);
+  add_integer(app, "--max-spp N", args->max_spp, 1, 1 << 24, "path passes stop here");
+  add_seed(app, args->seed, "random seed of the path tracer");
+  add_threads(app, args->threads);
+  add_max_depth(app, args->max_depth);
+  add_environment_override(app, args->environment);
+  add_display_options(app, args->display);
+  add_text(app, "--save-dir DIR", args->save_dir, "where key S saves NAME_CAMERA_N.exr and .png");
+  add_window_options(app, args->window);
+  add_real(app, "--spin DEG", args->spin_degrees, "turn the camera DEG degrees about the object after every frame");
+  app.footer("Without a display (DISPLAY unset) it fails at once; headless: xvfb-run.");
+  return [args] { return preview(*args); };
 }
 
 }  // namespace glaze

@@ -1,8 +1,8 @@
 // render_command.cpp: `glaze render`: images of a glTF scene's cameras, or a capture
 // set (DESIGN §4) for the inverse module.
-#include "app/arguments.h"
 #include "app/commands.h"
-#include "app/scene_options.h"
+#include "app/shared_options.h"
+#include "app/timing.h"
 #include "renderer/capture_set.h"
 #include "renderer/display.h"
 #include "renderer/error.h"
@@ -22,6 +22,27 @@
 
 namespace glaze {
 namespace {
+
+struct RenderCommandOptions {
+  std::string scene;
+  std::string out;                      // FILE.exr, FILE.png, or DIR with --camera all
+  std::optional<std::string> captures;  // or a capture set's DIR
+  std::optional<std::string> camera;
+  std::optional<Resolution> resolution;
+  std::string integrator = "path";
+  // The path tracer.
+  std::optional<int> spp;
+  std::optional<float> time_budget;
+  uint64_t seed = 0;
+  int threads = 0;
+  int max_depth = 8;
+  std::string estimator = "mis";
+  EnvironmentOverride environment;
+  std::vector<std::string> holdout;
+  // The sh integrator.
+  int lmax = 4, supersampling = 2, refined_supersampling = 0;
+  DisplaySettings display;  // of a picture
+};
 
 nlohmann::json environment_json(const EnvironmentSpec& spec) {
   nlohmann::json rows = nlohmann::json::array();
@@ -143,69 +164,44 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   }
 }
 
-}  // namespace
-
-int command_render(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"camera", "res", "spp", "time-budget", "seed", "threads", "integrator", "max-depth", "env",
-                             "env-scale", "env-rotation", "estimator", "out", "captures", "holdout", "lmax", "ss", "ss-refine", "exposure",
-                             "tone-map"});
-  if (args.positionals().size() != 1 || (args.has("out") == args.has("captures")))
-    throw Error("usage: glaze render SCENE [--camera NAME|all] --out FILE.exr|DIR, or glaze render SCENE --captures DIR");
-  const std::string integrator = args.text("integrator", "path");
-  require_integrator(integrator);
-  if (integrator != "sh" && (args.has("lmax") || args.has("ss") || args.has("ss-refine")))
-    throw Error("--lmax, --ss and --ss-refine apply to --integrator sh");
-  // A capture set's pixels must have the one K x K footprint that the fits model
-  // (invert-fit --pixel-footprint).
-  if (args.has("ss-refine") && args.has("captures"))
-    throw Error("--ss-refine makes pixels' footprints differ, which the fits do not model: leave it out with --captures");
-  if (integrator == "sh" && (args.has("spp") || args.has("time-budget") || args.has("estimator") || args.has("max-depth")))
-    throw Error("--spp, --time-budget, --estimator and --max-depth apply to --integrator path");
-  if (args.has("holdout") && !args.has("captures")) throw Error("--holdout applies to --captures");
-  if ((args.has("exposure") || args.has("tone-map")) && !is_picture(args.text("out", "")))
-    throw Error("--exposure and --tone-map apply to a picture: --out FILE.png (an EXR keeps the radiance)");
-
-  const Scene scene = load_scene(args.positionals()[0]);
-  const EnvironmentSpec spec = environment_spec(scene, args);
+int render(const RenderCommandOptions& args) {
+  const Scene scene = load_scene(args.scene);
+  const EnvironmentSpec spec = environment_spec(scene, args.environment);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
 
   PathTracerOptions path_options;
-  path_options.max_depth = static_cast<int>(args.integer("max-depth", 8, 1, 1000));
-  path_options.estimator = parse_direct_light_estimator(args.text("estimator", "mis"));
-  path_options.black_background = args.has("captures");
+  path_options.max_depth = args.max_depth;
+  path_options.estimator = parse_direct_light_estimator(args.estimator);
+  path_options.black_background = args.captures.has_value();
 
   RenderOptions options;
-  options.spp = static_cast<int>(args.integer("spp", 64, 1, 1 << 20));
-  options.time_budget = args.real("time-budget", 0.0f);
-  if (options.time_budget < 0.0) throw Error("option --time-budget must be >= 0 seconds");
-  options.seed = static_cast<uint64_t>(args.integer("seed", 0, 0, std::numeric_limits<long>::max()));
-  options.threads = static_cast<int>(args.integer("threads", 0, 0, 1024));
+  options.spp = args.spp.value_or(64);
+  options.time_budget = args.time_budget.value_or(0.0f);
+  options.seed = args.seed;
+  options.threads = args.threads;
   options.progress = isatty(STDERR_FILENO);
-  if (args.has("time-budget") && !args.has("spp")) options.spp = 4;  // samples per pass
+  if (args.time_budget && !args.spp) options.spp = 4;  // samples per pass
 
   if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
   ShIntegratorOptions sh;
-  sh.lmax = static_cast<int>(args.integer("lmax", 4, 0, kShMaxLmax));
-  sh.supersampling = static_cast<int>(args.integer("ss", 2, 1, 64));
-  sh.refined_supersampling = static_cast<int>(args.integer("ss-refine", 0, 0, 64));
-  sh.black_background = args.has("captures");
+  sh.lmax = args.lmax;
+  sh.supersampling = args.supersampling;
+  sh.refined_supersampling = args.refined_supersampling;
+  sh.black_background = args.captures.has_value();
   sh.threads = options.threads;
   const IntegratorOptions integrator_options{path_options, options, sh};
   const std::unique_ptr<Integrator> renderer =
-      make_integrator(integrator, scene, ray_tracer, environment, integrator_options);
-  DisplaySettings display;
-  display.exposure_ev = args.real("exposure", 0.0f);
-  display.tone_mapping = parse_tone_mapping(args.text("tone-map", "filmic"));
+      make_integrator(args.integrator, scene, ray_tracer, environment, integrator_options);
   const Job job{scene, spec, environment, *renderer, integrator_options, options.progress,
-                args.has("res") ? std::optional(args.resolution("res", {0, 0})) : std::nullopt, display};
+                args.resolution ? std::optional(args.resolution->pair()) : std::nullopt, args.display};
 
-  if (args.has("captures")) {
-    write_captures(job, args.text("captures", ""), args.names("holdout"), environment);
+  if (args.captures) {
+    write_captures(job, *args.captures, args.holdout, environment);
     return 0;
   }
-  const std::string camera_name = args.text("camera", scene.cameras.front().name);
-  const std::string out = args.text("out", "");
+  const std::string camera_name = args.camera.value_or(scene.cameras.front().name);
+  const std::string& out = args.out;
   if (camera_name == "all") {
     std::filesystem::create_directories(out);
     for (const CameraSpec& camera : scene.cameras) job.render_to(camera, (std::filesystem::path(out) / (camera.name + ".exr")).string());
@@ -213,6 +209,67 @@ int command_render(const std::vector<std::string>& raw) {
     job.render_to(scene.camera(camera_name), out);
   }
   return 0;
+}
+
+}  // namespace
+
+CommandRun declare_render(CLI::App& app) {
+  auto args = std::make_shared<RenderCommandOptions>();
+  app.description("path-trace a glTF scene's cameras, or a capture set for invert-fit");
+  add_scene(app, args->scene);
+  CLI::Option* out = add_text(app, "--out FILE.exr|DIR", args->out,
+                              "the image (radiance; FILE.png or .jpg: a picture, as the preview window shows it),\n"
+                              "or the folder of --camera all");
+  CLI::Option* captures = add_text(app, "--captures DIR", args->captures,
+                                   "write a capture set of every camera for invert-fit: DIR/transforms.json and\n"
+                                   "the views' EXR images (black background)");
+  out->excludes(captures);
+  add_camera(app, args->camera, "which camera (default: the first); all: every camera, DIR/NAME.exr");
+  add_film_resolution(app, args->resolution);
+  add_names(app, "--holdout NAME,...", args->holdout,
+            "cameras held out of the capture set: written to DIR/holdout, which invert-fit re-renders")
+      ->needs(captures);
+  add_environment_override(app, args->environment);
+  add_threads(app, args->threads);
+  add_integrator(app, args->integrator,
+             "path: the Monte-Carlo path tracer; sh: the analytic SH shading model, no noise");
+
+  const std::string path = "path tracer (--integrator path)", sh = "sh integrator (--integrator sh)";
+  const std::vector<CLI::Option*> path_options = {
+      add_spp(app, args->spp, "samples per pixel (default 64; with --time-budget, a pass's: default 4)"),
+      add_real(app, "--time-budget SEC", args->time_budget, "render passes of --spp samples until SEC is spent", 0.0f),
+      add_max_depth(app, args->max_depth),
+      add_choice(app, "--estimator NAME", args->estimator, {"mis", "bsdf", "environment"}, "direct light estimator"),
+  };
+  add_seed(app, args->seed, "random seed; the image depends only on it")->group(path);
+  const std::vector<CLI::Option*> sh_options = {
+      add_lmax(app, args->lmax, "SH band limit of the diffuse term"),
+      add_supersampling(app, args->supersampling),
+      add_integer(app, "--ss-refine M", args->refined_supersampling, 0, 64,
+                  "M x M samples where a pixel's K x K differ by over 1% (edges, silhouettes; 0: off;\n"
+                  "not with --captures: the fits model one footprint for every pixel)")
+          ->excludes(captures),
+  };
+  for (CLI::Option* option : path_options) option->group(path);
+  for (CLI::Option* option : sh_options) option->group(sh);
+  add_display_options(app, args->display);
+  const std::vector<CLI::Option*> picture_options = {app.get_option("--exposure"), app.get_option("--tone-map")};
+  for (CLI::Option* option : picture_options) option->group("picture (--out FILE.png)");
+
+  // The refusals that depend on values.
+  app.callback([args, out, captures, path_options, sh_options, picture_options] {
+    if (out->count() == 0 && captures->count() == 0) throw Error("give --out FILE.exr|DIR or --captures DIR");
+    auto given = [](const std::vector<CLI::Option*>& options) {
+      return std::any_of(options.begin(), options.end(), [](const CLI::Option* o) { return o->count() > 0; });
+    };
+    if (args->integrator != "sh" && given(sh_options))
+      throw Error("--lmax, --ss and --ss-refine apply to --integrator sh");
+    if (args->integrator == "sh" && given(path_options))
+      throw Error("--spp, --time-budget, --estimator and --max-depth apply to --integrator path");
+    if (given(picture_options) && !is_picture(args->out))
+      throw Error("--exposure and --tone-map apply to a picture: --out FILE.png (an EXR keeps the radiance)");
+  });
+  return [args] { return render(*args); };
 }
 
 }  // namespace glaze

@@ -17,11 +17,10 @@
 // comes from. Then `glaze convergence` on the red sphere in the office for the
 // error-against-run-time plot. OUT/results.json holds every number; OUT/report.md puts
 // them beside the figures (OUT/figures/*.png).
-#include "app/arguments.h"
 #include "app/commands.h"
 #include "app/figure.h"
 #include "app/pseudo_brdf.h"
-#include "app/scene_options.h"
+#include "app/shared_options.h"
 #include "app/timing.h"
 #include "renderer/capture_set.h"
 #include "renderer/error.h"
@@ -37,7 +36,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -241,9 +239,9 @@ class Reproduction {
   const Environment& environment(const Lighting& l) {
     std::unique_ptr<Environment>& cached = environments_[l.name];
     if (!cached) {
-      std::vector<std::string> raw;
-      if (!l.env.empty()) raw = {"--env", l.env};
-      const EnvironmentSpec spec = environment_spec(load_scene(scene_file(s_, "red", l)), Arguments(raw, {"env"}));
+      EnvironmentOverride lighting;
+      if (!l.env.empty()) lighting.source = l.env;
+      const EnvironmentSpec spec = environment_spec(load_scene(scene_file(s_, "red", l)), lighting);
       // (Environment does not move: built in place from make_environment's result.)
       cached.reset(new Environment(make_environment(spec.source, spec.options, spec.width, spec.height)));
     }
@@ -627,25 +625,35 @@ fs::path default_data_dir() {
   return fs::path(GLAZE_SOURCE_DIR) / ".." / "shared" / "data";
 }
 
-}  // namespace
+struct ReproduceCommandOptions {
+  std::string out;
+  bool quick = false;
+  std::optional<Resolution> resolution, texture_resolution, lighting_resolution;
+  int spp = 256;
+  uint64_t seed = 0;
+  std::optional<std::vector<std::string>> lighting;
+  std::vector<std::string> real_maps = {"st_fagans_interior_1k.hdr", "lebombo_1k.hdr"};
+  std::optional<std::string> scenes;
+  bool no_convergence = false;
+  int threads = 0;
+};
 
-int command_reproduce(const std::vector<std::string>& raw) {
-  const Arguments args(raw, {"out", "res", "spp", "seed", "texture-res", "env-res", "lighting", "real-maps", "scenes", "threads"}, {"quick", "no-convergence"});
-  if (!args.positionals().empty()) throw Error("usage: glaze reproduce --out DIR [--quick] (see `glaze help`)");
-  if (!args.has("out")) throw Error("glaze reproduce needs --out DIR (where the captures, fits, figures and report go)");
-  const bool quick = args.has("quick");
+int reproduce(const ReproduceCommandOptions& args) {
+  const bool quick = args.quick;
   Settings s;
-  s.out = args.text("out", "");
-  s.scenes = args.text("scenes", fs::exists("scenes/red_sphere_office.gltf") ? "scenes" : std::string(GLAZE_SOURCE_DIR) + "/scenes");
+  s.out = args.out;
+  const bool here = fs::exists("scenes/red_sphere_office.gltf");
+  s.scenes = args.scenes.value_or(here ? "scenes" : std::string(GLAZE_SOURCE_DIR) + "/scenes");
   if (!fs::exists(s.scenes / "red_sphere_office.gltf"))
     throw Error(s.scenes.string() + ": no scenes/red_sphere_office.gltf there; give glaze's scenes folder with --scenes DIR");
-  s.resolution = args.resolution("res", quick ? Size(160, 160) : Size(512, 512));
-  s.spp = static_cast<int>(args.integer("spp", 256, 1, 1 << 20));
-  s.seed = std::to_string(args.integer("seed", 0, 0, std::numeric_limits<long>::max()));
-  s.texture_resolution = args.resolution("texture-res", quick ? Size(64, 32) : Size(256, 128));
-  s.lighting_resolution = args.resolution("env-res", quick ? Size(128, 64) : Size(256, 128));
-  if (args.has("threads")) s.threads = std::to_string(args.integer("threads", 0, 1, 1024));
-  s.convergence = !args.has("no-convergence");
+  auto size = [](const std::optional<Resolution>& given, Size otherwise) { return given ? given->pair() : otherwise; };
+  s.resolution = size(args.resolution, quick ? Size(160, 160) : Size(512, 512));
+  s.spp = args.spp;
+  s.seed = std::to_string(args.seed);
+  s.texture_resolution = size(args.texture_resolution, quick ? Size(64, 32) : Size(256, 128));
+  s.lighting_resolution = size(args.lighting_resolution, quick ? Size(128, 64) : Size(256, 128));
+  if (args.threads > 0) s.threads = std::to_string(args.threads);
+  s.convergence = !args.no_convergence;
   // The reference's own noise must stay under half the 1% target: at 65536 spp it is
   // about 0.36% per pixel (2.9% at 1024), whatever the image size; 0.3% needs about
   // 16 times more (`glaze convergence --ref-spp`).
@@ -655,11 +663,11 @@ int command_reproduce(const std::vector<std::string>& raw) {
   const std::map<std::string, Lighting> procedural = {{"office", {"office", "office", ""}}, {"blue-room", {"blue-room", "blue_room", ""}}};
   const fs::path envmaps = default_data_dir() / "envmaps";
   std::vector<std::string> names;
-  if (args.has("lighting")) {
-    names = args.names("lighting");
+  if (args.lighting) {
+    names = *args.lighting;
   } else {
     names = {"office", "blue-room"};
-    for (const std::string& name : args.names("real-maps", "st_fagans_interior_1k.hdr,lebombo_1k.hdr")) {
+    for (const std::string& name : args.real_maps) {
       if (fs::exists(envmaps / name)) names.push_back(name);
       else std::printf("reproduce: %s not found under %s (set GLAZE_DATA_DIR): its experiments are skipped\n", name.c_str(), envmaps.string().c_str());
     }
@@ -673,6 +681,34 @@ int command_reproduce(const std::vector<std::string>& raw) {
   if (s.lightings.empty()) throw Error("--lighting: no lighting given");
   Reproduction(std::move(s)).run();
   return 0;
+}
+
+}  // namespace
+
+CommandRun declare_reproduce(CLI::App& app) {
+  auto args = std::make_shared<ReproduceCommandOptions>();
+  app.description("the paper's experiments end to end (Table 2, Figures 5-9, Table 3) with a report: DIR/report.md");
+  add_text(app, "--out DIR", args->out, "where the captures, fits, figures and report go")->required();
+  app.add_flag("--quick", args->quick,
+               "the reduced run (160x160 captures, 64x32 textures, 128x64 maps, a small convergence study):\n"
+               "minutes, not the full hour");
+  add_resolution(app, "--res WxH", args->resolution, "size of the captures (default 512x512)");
+  add_spp(app, args->spp, "samples per pixel of the captures");
+  add_seed(app, args->seed, "random seed of the captures' path tracer");
+  add_resolution(app, "--texture-res WxH", args->texture_resolution,
+                 "textures of the textured sphere (default 256x128)");
+  add_resolution(app, "--env-res WxH", args->lighting_resolution,
+                 "maps recovered by the lighting and joint fits (default 256x128)");
+  add_names(app, "--lighting L,...", args->lighting,
+            "office, blue-room, map files or names under $GLAZE_DATA_DIR/envmaps (default: office,\n"
+            "blue-room and --real-maps where present: absent ones are skipped, saying so)");
+  add_names(app, "--real-maps NAME,...", args->real_maps, "maps under $GLAZE_DATA_DIR/envmaps");
+  add_text(app, "--scenes DIR", args->scenes, "glaze's scenes folder (default ./scenes, else the source tree's)");
+  app.add_flag("--no-convergence", args->no_convergence, "leave out the error-against-run-time study");
+  add_threads(app, args->threads);
+  app.footer("Writes DIR/report.md (tables and figures side by side), DIR/results.json (every number),\n"
+             "DIR/figures/*.png, and the captures and fits behind them.");
+  return [args] { return reproduce(*args); };
 }
 
 }  // namespace glaze

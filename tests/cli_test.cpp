@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -31,6 +32,12 @@ TEST(Cli, ShPrintsJsonWithTheRequestedBand) {
   ASSERT_EQ(json["L_lm"].size(), 16u);
   EXPECT_NEAR(json["L_lm"][0][1].get<double>(), 2 * std::sqrt(kPiD), 1e-9);
   EXPECT_LT(std::abs(json["L_lm"][5][0].get<double>()), 1e-6);
+  // Integers are decimal: 010 is ten, not octal eight.
+  EXPECT_EQ(nlohmann::json::parse(glaze("sh procedural:constant --lmax 010 --res 64x32", dir).out)["lmax"], 10);
+  // A float option is float(strtod(text)): 1 + 2^-24 + 2^-60 is rounded to a double (the
+  // midpoint 1 + 2^-24), then to 1, not to the float above 1 that one rounding would give.
+  const std::string sh = "sh procedural:constant --lmax 0 --res 64x32 --scale ";
+  EXPECT_EQ(glaze(sh + "1.0000000596046447762579867379884035472", dir).out, glaze(sh + "1", dir).out);
 }
 
 TEST(Cli, ProceduralMapWrittenToFileProjectsLikeTheGeneratedOne) {
@@ -72,13 +79,133 @@ TEST(Cli, BadInputGivesClearErrors) {
   expect_clear_failure(glaze("env procedural office --out " + dir.file("x.nosuchformat"), dir), ".png or .jpg");
 }
 
-TEST(Cli, HelpAfterACommandPrintsTheHelp) {
+// Every command with the options it takes: its --help lists each.
+const std::map<std::string, std::vector<std::string>> kCommandOptions = {
+    {"demo", {"--out", "--spp", "--res"}},
+    {"sh", {"--lmax", "--scale", "--rotation", "--to-world", "--res"}},
+    {"env", {"--out", "--res"}},
+    {"render", {"--out", "--captures", "--camera", "--res", "--holdout", "--env", "--env-scale", "--env-rotation",
+                "--threads", "--integrator", "--spp", "--time-budget", "--max-depth", "--estimator", "--seed", "--lmax",
+                "--ss", "--ss-refine", "--exposure", "--tone-map"}},
+    {"convergence", {"--out", "--camera", "--res", "--ref-spp", "--ref", "--ref-noise", "--max-spp", "--seed",
+                     "--threads", "--max-depth", "--env", "--env-scale", "--env-rotation"}},
+    {"invert-fit", {"--mode", "--out", "--lmax", "--pixel-footprint", "--points", "--seed", "--min-cos",
+                    "--max-iterations", "--env", "--env-scale", "--env-rotation", "--holdout-dir", "--threads",
+                    "--loss", "--loss-scale", "--texture-res", "--R0", "--Rd", "--env-res", "--solve-res", "--ridge",
+                    "--diffuse-lmax", "--max-passes", "--preview", "--frames", "--screenshot", "--exposure",
+                    "--tone-map"}},
+#if GLAZE_HAVE_PREVIEW
+    {"preview", {"--camera", "--res", "--integrator", "--lmax", "--ss", "--max-spp", "--seed", "--threads",
+                 "--max-depth", "--env", "--env-scale", "--env-rotation", "--exposure", "--tone-map", "--save-dir",
+                 "--frames", "--screenshot", "--spin"}},
+#else
+    {"preview", {}},
+#endif
+    {"reproduce", {"--out", "--quick", "--res", "--spp", "--seed", "--texture-res", "--env-res", "--lighting",
+                   "--real-maps", "--scenes", "--no-convergence", "--threads"}},
+    {"help", {}},
+};
+
+// A line of `help` that lists `option`, or "".
+std::string help_line(const std::string& help, const std::string& option) {
+  const size_t at = help.find("\n  " + option + " ");
+  return at == std::string::npos ? "" : help.substr(at + 1, help.find('\n', at + 1) - at - 1);
+}
+
+TEST(Cli, EveryCommandHasItsOwnHelp) {
   testing::TemporaryDirectory dir;
-  for (const char* command : {"render --help", "invert-fit -h", "preview --help"}) {
-    const CommandResult run = glaze(command, dir);
-    EXPECT_EQ(run.exit_code, 0) << command << ": " << run.err;
-    EXPECT_NE(run.out.find("options of `invert-fit`"), std::string::npos) << command;
+  const CommandResult overview = glaze("help", dir);
+  EXPECT_EQ(overview.exit_code, 0) << overview.err;
+  EXPECT_EQ(glaze("--help", dir).out, overview.out);
+  EXPECT_EQ(glaze("", dir).exit_code, 2);  // no command: the overview, and a failure
+  for (const auto& [command, options] : kCommandOptions) {
+    EXPECT_NE(overview.out.find("\n  " + command + " "), std::string::npos) << command << "\n" << overview.out;
+    for (const char* help : {" --help", " -h"}) {
+      const CommandResult run = glaze(command + help, dir);
+      EXPECT_EQ(run.exit_code, 0) << command << help << ": " << run.err;
+      EXPECT_NE(run.out.find("Usage: glaze " + command), std::string::npos) << command << help << "\n" << run.out;
+      for (const std::string& option : options)
+        EXPECT_NE(help_line(run.out, option), "") << command << help << " does not list " << option << "\n" << run.out;
+      EXPECT_EQ(glaze("help " + command, dir).out, run.out) << command;
+    }
   }
+#if !GLAZE_HAVE_PREVIEW
+  EXPECT_NE(glaze("preview --help", dir).out.find("GLAZE_PREVIEW=OFF"), std::string::npos);
+#endif
+}
+
+// Declared once, the options that several commands take have the same bounds in each.
+TEST(Cli, SharedOptionsHaveOneBound) {
+  testing::TemporaryDirectory dir;
+  for (const std::string option : {"--threads", "--seed", "--max-depth", "--env-scale", "--exposure", "--tone-map"}) {
+    std::string bounds;
+    for (const auto& [command, options] : kCommandOptions) {
+      if (std::find(options.begin(), options.end(), option) == options.end()) continue;
+      // The notes after the help, "[0 to 1024; default 0; needs --x]", less what it needs.
+      const std::string line = help_line(glaze(command + " --help", dir).out, option);
+      std::string these = line.substr(std::min(line.size(), line.rfind('[')));
+      these = these.substr(0, std::min({these.find("; needs"), these.find("; not with"), these.find(']')}));
+      if (bounds.empty()) bounds = these;
+      EXPECT_EQ(these, bounds) << command << " " << option;
+    }
+  }
+}
+
+// Before any work, every command refuses an option it does not know and a value out of
+// the option's range, naming the option.
+TEST(Cli, UnknownOptionsAndOutOfRangeValuesNameTheOption) {
+  testing::TemporaryDirectory dir;
+  const std::string scene = std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf";
+  const std::string out = " --out " + dir.file("out");
+  const std::map<std::string, std::pair<std::string, std::string>> commands = {
+      // command line: an out-of-range option, and the option it names
+      {"demo" + out, {"--spp 0", "--spp"}},
+      {"sh procedural:office", {"--lmax 65", "--lmax"}},
+      {"env procedural office" + out + ".exr", {"--res 0x512", "--res"}},
+      {"render " + scene + out + ".exr", {"--threads 1025", "--threads"}},
+      {"convergence " + scene + out, {"--seed -1", "--seed"}},
+      {"invert-fit " + dir.file("captures") + " --mode material" + out, {"--pixel-footprint 17", "--pixel-footprint"}},
+#if GLAZE_HAVE_PREVIEW
+      {"preview " + scene, {"--max-spp 0", "--max-spp"}},
+#endif
+      {"reproduce" + out, {"--env-res 64x0", "--env-res"}},
+      {"help", {"--bogus 1", "--bogus"}},
+  };
+  for (const auto& [command, bad] : commands) {
+    // (No display: preview would fail at once, after its options.)
+    expect_clear_failure(testing::run_glaze(command + " --no-such-option 1", dir, "env -u DISPLAY "),
+                         "--no-such-option");
+    expect_clear_failure(testing::run_glaze(command + " " + bad.first, dir, "env -u DISPLAY "), bad.second);
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out")));  // nothing ran
+  // A value of an option that several commands take: refused by each alike.
+  expect_clear_failure(glaze("render " + scene + out + ".exr --threads -1", dir), "--threads");
+  expect_clear_failure(glaze("reproduce" + out + " --threads 1025", dir), "--threads");
+  expect_clear_failure(glaze("invert-fit x --mode material" + out + " --seed 1.5", dir), "--seed");
+}
+
+// Options that exclude each other, or that only some modes take, are refused together.
+TEST(Cli, RefusedCombinationsNameTheOptions) {
+  testing::TemporaryDirectory dir;
+  const std::string scene = std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf";
+  const std::string render = "render " + scene + " --out " + dir.file("x.exr");
+  const std::string fit = "invert-fit " + dir.file("captures") + " --out " + dir.file("fit");
+  expect_clear_failure(glaze(render + " --captures " + dir.file("c"), dir), "--captures");
+  expect_clear_failure(glaze("render " + scene, dir), "--out");
+  expect_clear_failure(glaze(render + " --holdout novel_0", dir), "--holdout");
+  expect_clear_failure(glaze(render + " --exposure 1", dir), "--exposure");
+  expect_clear_failure(glaze("convergence " + scene + " --out " + dir.file("c") + " --ref-noise 0.1", dir),
+                       "--ref-noise");
+  expect_clear_failure(glaze(fit + " --mode material --texture-res 8x8", dir), "--texture-res");
+  expect_clear_failure(glaze(fit + " --mode material --R0 0.04 --Rd 0.5,0.5,0.5", dir), "--R0");
+  expect_clear_failure(glaze(fit + " --mode texture --ridge 1e-3", dir), "--ridge");
+  expect_clear_failure(glaze(fit + " --mode joint --loss huber", dir), "--loss");
+  expect_clear_failure(glaze(fit + " --mode lighting --lmax 9", dir), "--lmax");
+  expect_clear_failure(glaze(fit + " --mode material --frames 2", dir), "--frames");
+  expect_clear_failure(glaze(fit + " --mode material --loss-scale 0.1", dir), "--loss-scale");
+  expect_clear_failure(glaze(fit + " --mode material --holdout novel_0", dir), "--holdout-dir");
+  expect_clear_failure(glaze(fit + " --mode lighting --Rd 0.5,0.5", dir), "--Rd");
+  for (const char* output : {"x.exr", "c", "fit"}) EXPECT_FALSE(std::filesystem::exists(dir.file(output))) << output;
 }
 
 TEST(Cli, NonTwoToOneMapWarnsButWorks) {

@@ -1,0 +1,84 @@
+// environment_commands.cpp: `glaze sh` (the SH coefficients of an environment map, as
+// JSON) and `glaze env` (a procedural map written to a file).
+#include "app/commands.h"
+#include "app/shared_options.h"
+#include "renderer/environment.h"
+#include "renderer/error.h"
+#include "renderer/image.h"
+#include "renderer/procedural_environment.h"
+#include "renderer/sh.h"
+
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+#include <memory>
+
+namespace glaze {
+namespace {
+
+struct ShCommandOptions {
+  std::string environment;
+  int lmax = 4;
+  EnvironmentOptions options;  // --scale, --rotation, and --to-world's matrix
+  std::vector<float> to_world;
+  Resolution resolution = kProceduralMapResolution;
+};
+
+struct EnvCommandOptions {
+  std::string kind, name, out;
+  Resolution resolution = kProceduralMapResolution;
+};
+
+nlohmann::json sh_json(const ShCoefficients& coefficients) {
+  nlohmann::json values = nlohmann::json::array();
+  for (const RGBd& c : coefficients.values) values.push_back({c[0], c[1], c[2]});
+  return {{"lmax", coefficients.lmax}, {"L_lm", values}};
+}
+
+int sh(ShCommandOptions args) {
+  if (!args.to_world.empty())
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) args.options.to_world(r, c) = args.to_world[r * 3 + c];
+  const Environment environment =
+      make_environment(args.environment, args.options, args.resolution.width, args.resolution.height);
+  std::cout << sh_json(environment.sh(args.lmax)).dump() << '\n';
+  return 0;
+}
+
+int env(const EnvCommandOptions& args) {
+  const auto [width, height] = args.resolution;
+  write_image(args.out, make_procedural_environment(args.name, width, height),
+              {{"glaze:environment", "procedural:" + args.name}});
+  std::cerr << "wrote " << args.out << " (" << width << "x" << height << ")\n";
+  return 0;
+}
+
+}  // namespace
+
+CommandRun declare_sh(CLI::App& app) {
+  auto args = std::make_shared<ShCommandOptions>();
+  app.description("print the SH coefficients of an environment map as JSON");
+  add_text(app, "ENV", args->environment, kEnvironmentSyntax)->required();
+  add_lmax(app, args->lmax, "band limit");
+  add_real(app, "--scale S", args->options.scale, "multiply the radiance");
+  add_real(app, "--rotation DEG", args->options.rotation_degrees, "rotate the map about +Y");
+  add_reals(app, "--to-world a,b,...", args->to_world, 9, "3x3 rotation, row-major, applied before --rotation");
+  CLI::Option* resolution = add_map_resolution(app, args->resolution);
+  app.callback([args, resolution] {
+    if (resolution->count() > 0 && !args->environment.starts_with("procedural:"))
+      throw Error("option --res sets the resolution of a procedural map; " + args->environment + " is a file");
+  });
+  return [args] { return sh(*args); };
+}
+
+CommandRun declare_env(CLI::App& app) {
+  auto args = std::make_shared<EnvCommandOptions>();
+  app.description("write a procedural environment map");
+  add_choice(app, "KIND", args->kind, {"procedural"}, "what kind of map")->required();
+  add_text(app, "NAME", args->name, "the procedural map: constant, office or blue-room")->required();
+  add_text(app, "--out FILE.exr", args->out, "the map's file")->required();
+  add_map_resolution(app, args->resolution);
+  return [args] { return env(*args); };
+}
+
+}  // namespace glaze

@@ -1,0 +1,77 @@
+// shared_options.h: the options that several glaze commands take, each declared once
+// here (command_line.h) so that its bounds, default and meaning cannot differ between the
+// commands, and what they apply to (an environment, a picture, the preview window).
+#pragma once
+
+#include "app/command_line.h"
+#include "renderer/integrator_registry.h"
+#include "renderer/display.h"
+#include "renderer/scene.h"
+#include "renderer/sh.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace glaze {
+
+// What ENV may be, wherever a command takes one.
+inline constexpr const char* kEnvironmentSyntax =
+    "a lat-long image (EXR, HDR, PFM, ...) or\nprocedural:NAME with NAME one of constant, office, blue-room";
+
+// SCENE: the glTF scene (render, convergence, preview).
+CLI::Option* add_scene(CLI::App& app, std::string& scene);
+// --res WxH of a procedural map (sh, env), by default as big as a scene's.
+inline constexpr Resolution kProceduralMapResolution{1024, 512};
+CLI::Option* add_map_resolution(CLI::App& app, Resolution& resolution);
+// --camera NAME: one of the scene's cameras (default: the first).
+CLI::Option* add_camera(CLI::App& app, std::optional<std::string>& camera, const std::string& help);
+// --res WxH of the film (default: the scene's film).
+CLI::Option* add_film_resolution(CLI::App& app, std::optional<Resolution>& resolution);
+// --threads N: worker threads, 0 for all cores.
+CLI::Option* add_threads(CLI::App& app, int& threads);
+// --seed S of the random numbers.
+CLI::Option* add_seed(CLI::App& app, uint64_t& seed, const std::string& help);
+// --spp N: path-traced samples per pixel.
+template <typename T>
+CLI::Option* add_spp(CLI::App& app, T& spp, const std::string& help) {
+  return add_integer(app, "--spp N", spp, 1, 1 << 20, help);
+}
+// --integrator NAME, one of the registry's (path, sh).
+template <typename T>
+CLI::Option* add_integrator(CLI::App& app, T& integrator, const std::string& help) {
+  return add_choice(app, "--integrator NAME", integrator, integrator_names(), help);
+}
+// --max-depth N of the path tracer.
+CLI::Option* add_max_depth(CLI::App& app, int& max_depth);
+// --lmax N: an SH band limit.
+template <typename T>
+CLI::Option* add_lmax(CLI::App& app, T& lmax, const std::string& help) {
+  return add_integer(app, "--lmax N", lmax, 0, kShMaxLmax, help);
+}
+// --ss K: the sh integrator's K x K samples a pixel.
+CLI::Option* add_supersampling(CLI::App& app, int& supersampling);
+
+// --env ENV, --env-scale S, --env-rotation DEG: the lighting instead of the scene's (or
+// the capture set's), or adjusted.
+struct EnvironmentOverride {
+  std::optional<std::string> source;
+  std::optional<float> scale, rotation_degrees;
+};
+void add_environment_override(CLI::App& app, EnvironmentOverride& environment);
+
+// The scene's environment with the override applied; throws glaze::Error if there is none.
+EnvironmentSpec environment_spec(const Scene& scene, const EnvironmentOverride& environment);
+
+// --exposure EV, --tone-map NAME: how radiance is shown as a picture.
+void add_display_options(CLI::App& app, DisplaySettings& display);
+
+// --frames N [--screenshot FILE.png]: show N steps in the window, then exit (headless
+// runs, tests).
+struct WindowOptions {
+  int frames = 0;  // 0: until the window is closed
+  std::string screenshot;
+};
+void add_window_options(CLI::App& app, WindowOptions& window);
+
+}  // namespace glaze
