@@ -4,6 +4,7 @@
 // the set's own lighting when it names one, and re-renders under the recovered lighting.
 #include "app/invert_fit.h"
 #include "inverse/capture_scene.h"
+#include "inverse/fit_diagnostics.h"
 #include "inverse/joint_fit.h"
 #include "inverse/lighting_fit.h"
 #include "renderer/error.h"
@@ -112,9 +113,8 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
                            {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint},
                            {"band_limited_diffuse", band_limited}, {"diffuse_lmax", data.diffuse_lmax},
                            {"passes", joint ? joint_fit->passes : data.diffuse_lmax > lmax ? 2 : 1}};
-  if (fit.condition > 1e6)
-    warn("the lighting system is ill-conditioned (condition number " + std::to_string(fit.condition) + ", normals cover " +
-         std::to_string(int(100 * data.normal_coverage)) + "% of the sphere): more views would constrain it; the ridge keeps it finite");
+  const LightingDiagnostics diagnostics = diagnose_lighting(fit, data, options, joint ? &*joint_fit : nullptr);
+  for (const std::string& warning : diagnostics.warnings) warn(warning);
   if (joint) {
     result["iterations"] = joint_fit->iterations;
     result["evaluations"] = joint_fit->evaluations;
@@ -130,52 +130,18 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
     result["converged"] = std::isfinite(fit.rms);
     result["rms"] = fit.rms;
   }
-  if (options.solve_width > 0 && !fit.map_consistent)
-    warn("only " + std::to_string(int(100 * fit.multi_view_fraction)) +
-         "% of the reflected directions are seen from two or more views: the mirror and the diffuse term cannot be "
-         "told apart there, so L_lm comes from the SH-only least squares (less accurate where the mirror dominates); "
-         "add views from other directions");
-  // A channel in which the mirror carries little of the light (a coloured object's own
-  // colour: the diffuse dominates) has a high-resolution map of noise amplified by 1/F,
-  // which the clamp at zero biases upwards; its L_lm stays sound.
-  for (int c = 0; c < 3; ++c)
-    if (fit.mirror_share >= 0.1 && fit.channel_mirror_share[c] < 0.1)
-      warn(std::string("in the ") + (c == 0 ? "red" : c == 1 ? "green" : "blue") + " channel the mirror carries only " +
-           std::to_string(std::lround(100 * fit.channel_mirror_share[c])) +
-           "% of the light: that channel's high-resolution map is unreliable (noise divided by F, and biased up where it "
-           "is clamped at zero); its L_lm is not");
-  if (fit.mirror_share < 0.1)
-    warn("the mirror reflection carries only " + std::to_string(std::lround(100 * fit.mirror_share)) +
-         "% of the observed light: the object is matte-like, so only the low frequencies (the SH part) are reliable; "
-         "the high-resolution map is noisy");
-  // The joint fit reads R0, and with it the lighting's absolute scale, from that share:
-  // measured on the white sphere in the blue room (9%), capture noise alone moves R0 by
-  // about 0.015 between noise realisations, and Rd and the scale with it.
-  if (joint && fit.mirror_share < 0.1)
-    warn("--mode joint reads R0 and the lighting's absolute scale from the mirror reflection, which here carries only " +
-         std::to_string(std::lround(100 * fit.mirror_share)) +
-         "%: R0, Rd and the scale are weakly determined and capture noise can move them far (check the residual "
-         "images); a known material (--mode lighting) or a glossier object pins them");
 
   // Against the set's own lighting, when it names one: what a known-truth experiment checks.
   if (const std::optional<EnvironmentSpec> truth = capture_environment(in.captures)) {
     const Environment environment = make_environment(truth->source, truth->options, truth->width, truth->height);
-    const ShCoefficients& reference = environment.sh(lmax);
-    double worst = 0.0;
-    for (int i = 0; i < sh_count(std::min(lmax, 2)); ++i)
-      worst = std::max(worst, ((fit.coefficients.values[i] - reference.values[i]).abs() / reference.values[0].abs().max(1e-12)).maxCoeff());
-    result["reference_L_lm_error_l2"] = worst;  // max |L_lm - true| / L00 over l <= 2
-    // The absolute scale: recovered over true L00, per channel.
-    result["reference_scale"] = rgb_json((fit.coefficients.values[0] / reference.values[0]).cast<float>());
+    const LightingComparison comparison = compare_lighting(fit, environment);
+    result["reference_L_lm_error_l2"] = comparison.L_lm_error_l2;
+    result["reference_scale"] = rgb_json(comparison.scale.cast<float>());
     if (!in.captures.material.is_null()) result["reference_material"] = in.captures.material;
-    for (const auto& [w, h] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
-      if (options.width % w != 0 || options.height % h != 0) continue;
-      int cells = 0;
-      const double error = map_error(fit, environment, w, h, &cells);
-      // No cell of this grid wholly covered (small or few views): nothing to compare.
-      result["reference_map_error"][std::to_string(w) + "x" + std::to_string(h)] = {
-          {"relative_rmse", cells > 0 ? nlohmann::json(error) : nlohmann::json(nullptr)}, {"cells", cells}};
-    }
+    for (const LightingComparison::MapError& error : comparison.map_errors)
+      result["reference_map_error"][std::to_string(error.width) + "x" + std::to_string(error.height)] = {
+          {"relative_rmse", error.cells > 0 ? nlohmann::json(error.relative_rmse) : nlohmann::json(nullptr)},
+          {"cells", error.cells}};
   }
 
   stage = Clock::now();
@@ -184,45 +150,16 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
   show_in_preview(preview, in.scene, material.R0(), material.Rd(), [recovered] { return recovered; }, "recovered lighting");
   write_renders(args, in, in.scene, *recovered, lmax, footprint, out, result);
-  // The check that needs no truth: the recovered lighting (and material) must reproduce
-  // the input views. Captures with noise differ by their noise (about 5% per pixel for a
-  // path tracer at 256 spp); much more means that the model misses what the cameras saw,
-  // typically a light source smaller than the views resolve, and L_lm is off with it.
   double worst_view = 0.0;
   for (const auto& view : result["renders"])
     if (view["relative_rmse"].is_number()) worst_view = std::max(worst_view, view["relative_rmse"].get<double>());
   result["worst_view_relative_rmse"] = worst_view;
-  if (worst_view > 0.1)
-    warn("the recovered lighting reproduces the input views only to " + std::to_string(std::lround(100 * worst_view)) +
-         "% relative RMSE (residual_view_*.exr shows where): the lighting has detail the captures do not resolve (a small, "
-         "bright source?), so L_lm may be off by several percent; use more pixels on the object, or more views");
-  if (joint && !joint_fit->passes_settled())
-    warn("the joint fit's passes stopped at " + std::to_string(joint_fit->passes) + " with the last still moving R0 by " +
-         std::to_string(joint_fit->pass_step) + " and Rd by " + std::to_string(joint_fit->pass_Rd_step) +
-         " (solver.txt lists them): the diffuse bands above lmax, predicted from each pass's lighting and material, and "
-         "the fit are not yet consistent, so R0 and Rd may be off by about that much (Rd by several times R0's step) and "
-         "the scale with Rd; raise --max-passes");
-  else if (joint && !joint_fit->converged)
-    warn("the joint fit stopped after " + std::to_string(joint_fit->iterations) +
-         " rounds with R0 still moving (solver.txt lists them): R0 and Rd are the last round's; raise --max-iterations "
-         "or add views");
+  if (const std::optional<std::string> warning = reproduction_warning(worst_view)) warn(*warning);
+  for (const std::string& warning : diagnostics.convergence_warnings) warn(warning);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
   result["seconds"] = seconds_since(start);
-  // Lighting alone is linear least squares: its report says what was solved, and how well posed.
-  char linear_report[640];
-  std::snprintf(linear_report, sizeof linear_report,
-                "glaze lighting recovery: linear least squares (no iterations)\n"
-                "  L_lm, lmax %d: %d unknowns per channel; condition number %.4g (before the ridge %.3g)\n"
-                "  solve: %s at %dx%d (%.1f%% of its covered texels seen from two or more views)\n"
-                "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n"
-                "  diffuse term modelled to l = %d%s\n",
-                lmax, sh_count(lmax), fit.condition, options.ridge,
-                fit.map_consistent ? "map-consistent (value and gradient per texel, with L_lm)" : "SH-only least squares",
-                options.solve_width, options.solve_height, 100 * fit.multi_view_fraction, in.samples.samples.size(),
-                fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2],
-                data.diffuse_lmax, data.diffuse_lmax > lmax ? " (bands above lmax predicted by a first fit's map: 2 passes)" : "");
-  write_fit(out, result, joint ? joint_fit->full_report : std::string(linear_report));
+  write_fit(out, result, joint ? joint_fit->full_report : diagnostics.linear_report);
   if (joint)
     std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d rounds, %s)\n", material.R0(), material.Rd()[0],
                 material.Rd()[1], material.Rd()[2], joint_fit->iterations, joint_fit->converged ? "converged" : "NOT converged");

@@ -4,14 +4,13 @@
 // per-view residuals, re-renders of every view and held-out view, texture.exr.
 #include "app/invert_fit.h"
 #include "inverse/capture_scene.h"
+#include "inverse/fit_diagnostics.h"
 #include "inverse/material_fit.h"
 #include "inverse/texture_fit.h"
 #include "renderer/error.h"
 #include "renderer/image.h"
-#include "renderer/latlong.h"
 #include "renderer/sh.h"
 
-#include <cmath>
 #include <cstdio>
 #include <optional>
 
@@ -67,15 +66,9 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   if (mode == "material") {
     result["Rd"] = rgb_json(fit.Rd[0]);
     result["Rd_unclamped"] = rgb_json(fit.Rd_unclamped[0]);
-    // A channel no sample's diffuse term reaches (R0 = 1: a pure mirror) is unknown.
-    result["Rd_constrained"] = nlohmann::json::array();
-    for (int c = 0; c < 3; ++c) {
-      const bool constrained = fit.constraint[0][c] > 1e-12 * std::max(1.0, fit.constraint[0].maxCoeff());
-      result["Rd_constrained"].push_back(constrained);
-      if (!constrained)
-        warn(std::string("Rd ") + "RGB"[c] + " is not constrained by the data (no diffuse reflection seen: R0 = " +
-             std::to_string(fit.R0) + "); it is reported as 0");
-    }
+    const MaterialDiagnostics diagnostics = diagnose_material(fit);
+    result["Rd_constrained"] = diagnostics.Rd_constrained;
+    for (const std::string& warning : diagnostics.warnings) warn(warning);
   } else {
     const auto [width, height] = args.texture_resolution;
     result["homogeneous"] = {{"R0", fit.R0}, {"Rd", rgb_json(fit.Rd[0])}};
@@ -114,21 +107,11 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
 
   // Per-view residuals over the samples, then re-renders of the inputs and held-out views.
   nlohmann::json per_view = nlohmann::json::array();
-  {
-    std::vector<double> squared(captures.frames.size(), 0.0), observed(captures.frames.size(), 0.0);
-    for (size_t k = 0; k < samples.samples.size(); ++k) {
-      const Sample& s = samples.samples[k];
-      const RGB& Rd = fit.Rd[texture ? texel_of(s.uv, texture->Rd.width, texture->Rd.height) : 0];
-      squared[s.frame] += (s.observed - predict(terms[k], fit.R0, Rd)).cast<double>().square().sum();
-      observed[s.frame] += s.observed.cast<double>().square().sum();
-    }
-    for (size_t f = 0; f < captures.frames.size(); ++f) {
-      const double n = 3.0 * std::max<size_t>(samples.per_frame[f], 1);
-      per_view.push_back({{"file", captures.frames[f].file_path}, {"samples", samples.per_frame[f]},
-                          {"dropped", drops_json(samples.dropped[f])}, {"rms", std::sqrt(squared[f] / n)},
-                          {"relative_rms", observed[f] > 0 ? std::sqrt(squared[f] / observed[f]) : 0.0}});
-    }
-  }
+  const std::vector<ViewResidual> residuals = view_residuals(samples, terms, fit, texture ? &*texture : nullptr);
+  for (size_t f = 0; f < captures.frames.size(); ++f)
+    per_view.push_back({{"file", captures.frames[f].file_path}, {"samples", samples.per_frame[f]},
+                        {"dropped", drops_json(samples.dropped[f])}, {"rms", residuals[f].rms},
+                        {"relative_rms", residuals[f].relative_rms}});
   result["views"] = per_view;
 
   stage = Clock::now();

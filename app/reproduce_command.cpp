@@ -13,15 +13,16 @@
 //   - Figure 8: --mode lighting (known material); Figure 9 and Table 3: --mode joint.
 // Across lightings, Figure 7: each recovered material rendered in every other lighting
 // against the true appearance there, for the path-traced RGB captures and for captures
-// of a spectral camera (app/pseudo_brdf.h), which is where the paper's colour shift
+// of a spectral camera (inverse/pseudo_brdf.h), which is where the paper's colour shift
 // comes from. Then `glaze convergence` on the red sphere in the office for the
 // error-against-run-time plot. OUT/results.json holds every number; OUT/report.md puts
 // them beside the figures (OUT/figures/*.png).
 #include "app/commands.h"
 #include "app/figure.h"
-#include "app/pseudo_brdf.h"
 #include "app/shared_options.h"
 #include "app/timing.h"
+#include "inverse/fit_diagnostics.h"
+#include "inverse/pseudo_brdf.h"
 #include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
@@ -128,26 +129,12 @@ void make_spectral(const fs::path& folder, const Scene& scene, const Environment
   const RayTracer tracer(scene);
   for (const CaptureFrame& frame : set.frames)
     write_image(frame.file_path, render_sh_spectral(scene, tracer, environment, frame.camera, {lmax, ss, true, 0, true}, M),
-                {{"glaze:integrator", "sh (spectral camera, app/pseudo_brdf.h)"}});
-}
-
-struct Transfer {
-  double relative_rmse = 0.0;
-  RGB colour_ratio = RGB::Ones();  // mean rendered / mean true over the object, per channel
-};
-
-// A render of a recovered material against the true appearance, over the object's interior.
-Transfer compare(const Image& rendered, const Image& truth, const std::vector<uint8_t>& mask) {
-  RGBd rendered_sum = RGBd::Zero(), truth_sum = RGBd::Zero();
-  for (size_t p = 0; p < mask.size(); ++p)
-    if (mask[p])
-      for (int c = 0; c < 3; ++c) rendered_sum[c] += rendered.pixels[3 * p + c], truth_sum[c] += truth.pixels[3 * p + c];
-  return {image_error(rendered, truth, mask).relative_rmse, (rendered_sum / truth_sum.max(1e-30)).cast<float>()};
+                {{"glaze:integrator", "sh (spectral camera, inverse/pseudo_brdf.h)"}});
 }
 
 // What Figure 7 shows of one transfer.
 struct TransferImages {
-  Transfer numbers;
+  AppearanceError numbers;
   Image truth, rendered;
   std::vector<uint8_t> mask;
 };
@@ -277,7 +264,7 @@ class Reproduction {
             const json& recovered = fit_of(a, kind == "rgb" ? object : std::string(object) + "_spectral", "material");
             Image rendered = render_sh(with_material(scene, recovered["R0"].get<float>(), rgb_of(recovered["Rd"])), tracer,
                                        environment(b), camera, options);
-            const Transfer t = compare(rendered, truth, mask);
+            const AppearanceError t = appearance_error(rendered, truth, mask);
             results_["transfer"].push_back({{"kind", kind}, {"object", object}, {"fitted_in", a.name}, {"shown_in", b.name},
                                             {"relative_rmse", t.relative_rmse},
                                             {"colour_ratio", {t.colour_ratio[0], t.colour_ratio[1], t.colour_ratio[2]}},
@@ -340,17 +327,7 @@ class Reproduction {
       for (const std::string kind : {"rgb", "spectral"}) {
         std::vector<std::pair<double, double>> pairs;
         for (const Lighting& l : s_.lightings) pairs.push_back({spread[l.name], results_["transfer_mean"][kind][l.name].get<double>()});
-        auto ranks = [&](bool second) {
-          std::vector<double> rank(pairs.size());
-          for (size_t i = 0; i < pairs.size(); ++i)
-            for (size_t j = 0; j < pairs.size(); ++j)
-              if ((second ? pairs[j].second < pairs[i].second : pairs[j].first < pairs[i].first)) rank[i] += 1.0;
-          return rank;
-        };
-        const std::vector<double> a = ranks(false), b = ranks(true);
-        double d2 = 0.0;
-        for (size_t i = 0; i < a.size(); ++i) d2 += (a[i] - b[i]) * (a[i] - b[i]);
-        const double n = double(a.size()), rho = 1.0 - 6.0 * d2 / (n * (n * n - 1.0));
+        const double rho = rank_correlation(pairs);
         results_["transfer_rank_correlation"][kind] = rho;
         summary << " Rank correlation of colour spread with that error, " << (kind == "rgb" ? "RGB captures: " : "spectral camera: ")
                 << fixed(rho, 2) << ".";
@@ -559,8 +536,9 @@ void Reproduction::report() const {
         "Each material recovered in one lighting is rendered (view_0, sh integrator) in another and compared with its true "
         "appearance there. *RGB captures*: the path-traced captures above, which, like glaze, render per RGB channel, so a "
         "material transfers up to its fitting error. *Spectral camera*: noise-free captures of a camera that integrates "
-        "31 wavelengths (app/pseudo_brdf.h); an RGB fit then finds a pseudo-BRDF that depends on the light it was fitted "
-        "under, which is the colour shift the paper reports. Colour ratio: mean rendered over mean true, per channel.\n\n"
+        "31 wavelengths (inverse/pseudo_brdf.h); an RGB fit then finds a pseudo-BRDF that depends on the light it was "
+        "fitted under, which is the colour shift the paper reports. Colour ratio: mean rendered over mean true, "
+        "per channel.\n\n"
         "| captures | sphere | fitted in | shown in | relative RMSE | colour ratio (r g b) |\n|---|---|---|---|---|---|\n";
   for (const json& row : r["transfer"])
     md << "| " << row["kind"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << row["fitted_in"].get<std::string>() << " | "

@@ -3,6 +3,7 @@
 #include "inverse/cross_view.h"
 #include "renderer/error.h"
 #include "renderer/material.h"
+#include "renderer/shading.h"
 
 #include <algorithm>
 #include <array>
@@ -226,8 +227,9 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
     RGB Rd;
     if (joint.band_limited_diffuse) {
       *lighting = cross.lighting(R0, d, kMirrorIntegralWidth, kMirrorIntegralHeight);
+      const double diffuse_per_Rd = ShadingCoefficients<double>(R0).diffuse;
       for (int c = 0; c < 3; ++c)
-        Rd[c] = float(std::clamp(d(0, c) / (kDiffuseNormalisation * (1.0 - R0) * (*lighting)(0, c)), double(rd_bounds.lower),
+        Rd[c] = float(std::clamp(d(0, c) / (diffuse_per_Rd * (*lighting)(0, c)), double(rd_bounds.lower),
                                  double(rd_bounds.upper)));
     } else {
       Rd = systems.Rd(R0);
@@ -294,8 +296,9 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
   // where the views' mirror estimates leave much of the sphere unseen); for a black
   // channel, the views' mirror estimates.
   if (joint.band_limited_diffuse) {
+    const double diffuse_per_Rd = ShadingCoefficients<double>(R0).diffuse;
     for (int c = 0; c < 3; ++c) {
-      const double per_L = kDiffuseNormalisation * (1.0 - R0) * fit.Rd[c];
+      const double per_L = diffuse_per_Rd * fit.Rd[c];
       for (int i = 0; i < lighting.rows(); ++i)
         fit.lighting.coefficients.values[i][c] = per_L > 1e-3 ? d(i, c) / per_L : lighting(i, c);
     }

@@ -214,8 +214,9 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
 
 Eigen::VectorXd solve_sh_lighting(const LightingData& data, float R0, float Rd, int channel, double ridge,
                                   double* condition, double* squared_error) {
-  // Row = a - q b + s c with q = 1 - R0, s = 21/(20 pi) Rd q (shading.h's affine form).
-  const double q = 1.0 - R0, s = kDiffuseNormalisation * Rd * q;
+  // Row = a - q b + s c (shading.h's affine form).
+  const ShadingCoefficients<double> shading(R0, Rd);
+  const double q = shading.transmittance, s = shading.diffuse;
   const Eigen::MatrixXd normal = data.aa - q * (data.ab + data.ab.transpose()) + s * (data.ac + data.ac.transpose()) +
                                  q * q * data.bb - q * s * (data.bc + data.bc.transpose()) + s * s * data.cc;
   const Eigen::VectorXd rhs = data.ao.col(channel) - q * data.bo.col(channel) + s * data.co.col(channel);
@@ -322,7 +323,8 @@ std::vector<Eigen::Matrix3d> MapConsistentSystem::blocks(double q) const {
 }
 
 MapConsistentSystem::Profile MapConsistentSystem::profile(double R0) const {
-  const double q = 1.0 - R0;
+  const ShadingCoefficients<double> per_unit_Rd(R0);
+  const double q = per_unit_Rd.transmittance;
   const int m = int(phi_phi_.size()), n = n_;
   const std::vector<Eigen::Matrix3d> B = blocks(q);
   const Eigen::MatrixXd E = phi_c_ - q * g_phi_c_;  // E' (3m x n): E = s E'
@@ -339,7 +341,7 @@ MapConsistentSystem::Profile MapConsistentSystem::profile(double R0) const {
     value_rows_b1.row(t) = B_inverse_b1.row(3 * t);
   }
   Profile p;
-  p.diffuse_per_Rd = kDiffuseNormalisation * q;
+  p.diffuse_per_Rd = per_unit_Rd.diffuse;
   p.EE = E.transpose() * B_inverse_E;
   p.EQ = value_rows_E.transpose() * Q_.transpose();
   p.QQ = Q_ * value_weight.asDiagonal() * Q_.transpose();
@@ -353,7 +355,7 @@ MapConsistentSystem::Profile MapConsistentSystem::profile(double R0) const {
 }
 
 double MapConsistentSystem::Profile::squared_error(double Rd, int channel) const {
-  // With s = 21/(20 pi) (1 - R0) Rd, U = [s E', Qx^T], rhs = b1 + s Qx^T co:
+  // With s = diffuse_per_Rd Rd, U = [s E', Qx^T], rhs = b1 + s Qx^T co:
   //   rhs.x = rhs^T B^-1 rhs - w^T K^-1 w,  w = U^T B^-1 rhs,  K = C^-1 + U^T B^-1 U,
   // every term a product of the R0-only matrices above with powers of s.
   const double s = diffuse_per_Rd * Rd;
@@ -374,7 +376,8 @@ double MapConsistentSystem::Profile::squared_error(double Rd, int channel) const
 MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, int channel) const {
   // Unknowns: per covered texel its value and its gradient (x = [T, Gu, Gv] per texel);
   // L = Q T. With F_k = 1 - q g_k, the per-texel blocks come from the gathered sums.
-  const double q = 1.0 - R0, diffuse_scale = kDiffuseNormalisation * Rd * q;
+  const ShadingCoefficients<double> shading(R0, Rd);
+  const double q = shading.transmittance, diffuse_scale = shading.diffuse;
   const int m = int(phi_phi_.size()), n = n_;
   // sum d d^T and sum o d are the gathered moments of c, scaled.
   const Eigen::MatrixXd M = diffuse_scale * diffuse_scale * cc_;
@@ -675,12 +678,11 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   const int width = options.width, height = options.height;
   RGBd mirror_light = RGBd::Zero(), all_light = RGBd::Zero();
   double mirror_total = 0.0;
-  const double q = 1.0 - R0;
   // Each sample's mirror part and texel in parallel, then their sums in sample order, so
   // that the map does not depend on the thread count.
   std::vector<RGBd> mirror(count);
   std::vector<size_t> texel_of_sample(count);
-  const Eigen::Vector3d diffuse_per_L = kDiffuseNormalisation * q * Rd.cast<double>().matrix();
+  const Eigen::Vector3d diffuse_per_L = ShadingCoefficients<double>(R0).diffuse * Rd.cast<double>().matrix();
   tbb::parallel_for(size_t(0), count, [&](size_t k) {
     const Eigen::Vector3d diffuse = diffuse_per_L.cwiseProduct(L.transpose() * data.c_row(k).cast<double>());
     mirror[k] = data.observed[k].cast<double>() - diffuse.array();
@@ -758,7 +760,7 @@ double map_error(const LightingFit& fit, const Environment& truth, int width, in
 
 DiffuseBandsAbove predict_diffuse_bands(const Image& map, int diffuse_lmax, float R0, const RGB& Rd) {
   const Environment recovered(map, EnvironmentOptions{}, "the recovered lighting");
-  return {recovered.sh(diffuse_lmax), kDiffuseNormalisation * (1.0 - R0) * Rd.cast<double>()};
+  return {recovered.sh(diffuse_lmax), ShadingCoefficients<double>(R0).diffuse * Rd.cast<double>()};
 }
 
 LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,

@@ -29,8 +29,9 @@
 
 namespace glaze {
 
-// Per sample, per SH index i, the model row is polished_radiance(R0, Rd, {a_i, b_i, c_i})
-// (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l h_l Y_i(n)).
+// Per sample, per SH index i, the model row is ShadingCoefficients(R0, Rd).radiance({a_i,
+// b_i, c_i}) (shading.h's affine form with L -> Y_i(r), gL -> g Y_i(r), gE -> g Lambda_l
+// h_l Y_i(n)).
 struct LightingData {
   int lmax = 0;
   int footprint = 1;  // rays per side of each pixel's model (footprint.h)

@@ -51,7 +51,7 @@ RobustLoss RobustLoss::parse(const std::string& name, double scale) {
 
 RGB predict(const ShadingTerms& terms, float R0, const RGB& Rd) {
   RGB result;
-  for (int c = 0; c < 3; ++c) result[c] = polished_radiance(R0, Rd[c], terms[c]);
+  for (int c = 0; c < 3; ++c) result[c] = ShadingCoefficients<float>(R0, Rd[c]).radiance(terms[c]);
   return result;
 }
 
@@ -126,18 +126,19 @@ class NestedResidual {
 
   template <typename T>
   T prediction(const T& R0, const T& Rd, size_t k, int c) const {
-    return polished_radiance(R0, Rd, terms_[k][c]);
+    return ShadingCoefficients<T>(R0, Rd).radiance(terms_[k][c]);
   }
 
   // Per group and channel, the weighted normal equations at R0 (robust weights fixed).
   template <typename T>
   std::vector<DiffuseNormalEquations<T>> solve(const T& R0, const std::vector<double>& robust) const {
     std::vector<DiffuseNormalEquations<T>> equations(groups_);
+    const ShadingCoefficients<T> per_unit_Rd(R0);
     for (size_t k = 0; k < samples_.size(); ++k) {
       const Sample& sample = samples_[k];
       for (int c = 0; c < 3; ++c) {
-        const T specular = polished_specular_radiance(R0, terms_[k][c]);
-        const T basis = polished_diffuse_radiance(R0, T(1), terms_[k][c]);
+        const T specular = per_unit_Rd.specular_radiance(terms_[k][c]);
+        const T basis = per_unit_Rd.diffuse_radiance(terms_[k][c]);
         equations[group_of(k)].add(c, base_weight(k) * robust[3 * k + c], double(sample.observed[c]), specular, basis);
       }
     }
@@ -169,7 +170,8 @@ class NestedResidual {
 };
 
 // Least squares without a robust loss, in closed form. Per group and channel, sample k's
-// residual is linear in z = (1, q, q Rd) with q = 1 - R0 (shading.h's affine form):
+// residual is linear in z = (1, q, q Rd) with q = 1 - R0 (shading.h's ShadingCoefficients,
+// s = K Rd q with K = 21/(20 pi)):
 //   r_k = (o - L) + q gL - q Rd K gE = v_k . z,   v_k = (o - L, gL, -K gE),
 // so sum_k w_k r_k^2 = z^T M z with M = sum_k w_k v_k v_k^T. Factoring M = U^T U turns that
 // sum into the three residuals U z: exactly the per-sample objective and its Jacobian,
@@ -197,7 +199,7 @@ class MomentResidual {
 
   template <typename T>
   bool operator()(const T* const R0, T* residuals) const {
-    const T q = T(1) - R0[0];
+    const T q = ShadingCoefficients<T>(R0[0]).transmittance;
     for (size_t group = 0; group < moments_.size() / 3; ++group) {
       const DiffuseNormalEquations<T> equations = equations_of(group, q);
       for (int c = 0; c < 3; ++c) {
@@ -211,7 +213,8 @@ class MomentResidual {
 
   std::vector<DiffuseNormalEquations<double>> inner_solve(double R0) const {
     std::vector<DiffuseNormalEquations<double>> all;
-    for (size_t group = 0; group < moments_.size() / 3; ++group) all.push_back(equations_of(group, 1.0 - R0));
+    const double q = ShadingCoefficients<double>(R0).transmittance;
+    for (size_t group = 0; group < moments_.size() / 3; ++group) all.push_back(equations_of(group, q));
     return all;
   }
 

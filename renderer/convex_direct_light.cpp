@@ -93,11 +93,11 @@ void PathTracer::convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB
     }
     for (int k = 0; k < kLanes; ++k) lobe_light_pdf[k] = need_light_pdf && hit[k] && k < n ? environment_.pdf(lobe_at[k]) : 0.0f;
 
-    // 6. SIMD: the weight of each lookup. The mirror: F(mu_o). The environment's
-    // direction: f_d cos / pdf without Rd, times its MIS weight. The lobe's: f_d cos / pdf
-    // = (1 - R0) g(mu_o) without Rd (its density is exactly proportional to the rest),
-    // times its MIS weight. Zero where a direction is below the horizon (for a sphere
-    // the geometric normal is the shading normal) or the camera ray missed.
+    // 6. SIMD: the weight of each lookup, the material's (material.h) per unit of Rd. The
+    // mirror: F(mu_o). The environment's direction: f_d cos / pdf, times its MIS weight.
+    // The lobe's: diffuse_lobe_weight, times its MIS weight. Zero where a direction is
+    // below the horizon (for a sphere the geometric normal is the shading normal) or the
+    // camera ray missed.
     for (int k = 0; k < kLanes; ++k) {
       const bool seen = hit[k] != 0 && mu_o[k] > 0.0f;
       mirror_weight[k] = seen ? schlick_fresnel(R0, mu_o[k]) : 0.0f;
@@ -105,7 +105,7 @@ void PathTracer::convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB
     for (int k = 0; k < kLanes; ++k) {
       const bool seen = hit[k] != 0 && mu_o[k] > 0.0f;
       const float mu_lobe = normal.x[k] * lobe.x[k] + normal.y[k] * lobe.y[k] + normal.z[k] * lobe.z[k];
-      lobe_weight[k] = seen && mu_lobe > 0.0f ? lobe_used * (1.0f - R0) * coat_transmittance_g(mu_o[k]) *
+      lobe_weight[k] = seen && mu_lobe > 0.0f ? lobe_used * diffuse_lobe_weight(R0, mu_o[k]) *
                                                     power_heuristic(lobe_density[k], lobe_light_pdf[k])
                                               : 0.0f;
     }

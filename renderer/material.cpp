@@ -155,10 +155,7 @@ std::optional<MaterialSample> PolishedMaterial::sample(const Vec3& wo, float u_l
 std::optional<MaterialSample> PolishedMaterial::sample_diffuse(const Vec3& wo, const Vec2& u) const {
   if (!(wo.z() > 0.0f)) return std::nullopt;
   const Vec3 wi = sample_diffuse_lobe(u);
-  // f_d cos / pdf with pdf exactly proportional to g(mu_i) mu_i: only the outgoing
-  // factor remains, so the estimate carries no noise from the BRDF itself.
-  const RGB weight = Rd_ * ((1.0f - R0_) * coat_transmittance_g(wo.z()));
-  return MaterialSample{wi, weight, diffuse_lobe_pdf(wi.z()), false};
+  return MaterialSample{wi, Rd_ * diffuse_lobe_weight(R0_, wo.z()), diffuse_lobe_pdf(wi.z()), false};
 }
 
 float PolishedMaterial::pdf_diffuse(const Vec3& wo, const Vec3& wi) const {

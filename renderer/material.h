@@ -102,7 +102,7 @@ class PolishedMaterial {
   std::optional<MaterialSample> sample(const Vec3& wo, float u_lobe, const Vec2& u) const;
 
   // The diffuse lobe alone (no lobe choice), for estimators that take the mirror term
-  // deterministically: weight f_d cos / pdf = Rd (1 - R0) g(mu_o), pdf diffuse_lobe_pdf.
+  // deterministically: weight Rd diffuse_lobe_weight(R0, mu_o), pdf diffuse_lobe_pdf.
   std::optional<MaterialSample> sample_diffuse(const Vec3& wo, const Vec2& u) const;
 
   // Solid-angle density of sample() producing wi through the diffuse lobe.
@@ -125,6 +125,13 @@ class PolishedMaterial {
 inline float diffuse_lobe_pdf(float cos_theta) {
   return cos_theta > 0.0f ? static_cast<float>(kDiffuseNormalisation) * coat_transmittance_g(cos_theta) * cos_theta
                           : 0.0f;
+}
+// The weight f_d cos(theta_i) / pdf per unit of Rd of a direction drawn from that density:
+// it is exactly proportional to the incident factor g(mu_i) mu_i, so only the outgoing
+// factor (1 - R0) g(mu_o) remains (and the estimate has no noise from the BRDF itself).
+template <typename T, typename S>
+T diffuse_lobe_weight(T R0, S mu_o) {
+  return (T(1) - R0) * coat_transmittance_g(mu_o);
 }
 Vec3 sample_diffuse_lobe(const Vec2& u);
 // sample_diffuse_lobe() in two steps: cos(theta) = C^-1(u.x) for the lobe's CDF C (by

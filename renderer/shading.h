@@ -1,4 +1,4 @@
-// shading.h: the dual angular/frequency-space shading model (DESIGN §2), per channel:
+// shading.h: the dual angular/frequency-space shading model (docs/design.md §2), per channel:
 //
 //   Lo(n, v) = F(n.v) L(r)  +  21/(20 pi) Rd (1 - R0) g(n.v) E(n),   r = 2 (n.v) n - v
 //
@@ -8,11 +8,12 @@
 //
 // Since F = 1 - (1 - R0) g (Schlick), the model is affine in three per-ray terms,
 //
-//   Lo = L  -  (1 - R0) gL  +  21/(20 pi) Rd (1 - R0) gE,   gL = g(n.v) L(r), gE = g(n.v) E(n),
+//   Lo = L  -  q gL  +  s gE,   q = 1 - R0,  s = 21/(20 pi) Rd q,   gL = g(n.v) L(r), gE = g(n.v) E(n),
 //
 // so the mean of Lo over several rays (a pixel's footprint) is the same formula applied
-// to the means of L, gL and gE. ShadingBasis holds them; polished_radiance is written on
-// it alone, so a single ray and a whole pixel go through one routine.
+// to the means of L, gL and gE. ShadingBasis holds those terms and ShadingCoefficients
+// the material's q and s, which the SH integrator and every fit (their linear systems'
+// rows included) take from here rather than writing them out.
 #pragma once
 
 #include "renderer/material.h"
@@ -42,29 +43,41 @@ struct ShadingBasis {
   }
 };
 
-// The mirror term F L = L - (1 - R0) gL.
-template <typename T, typename S>
-T polished_specular_radiance(T R0, const ShadingBasis<S>& basis) {
-  return T(basis.L) - (T(1) - R0) * T(basis.gL);
-}
+// The material's coefficients of the affine form, for one channel. Fits that solve for
+// Rd after R0 make them with Rd = 1, per unit of Rd: `diffuse` is then 21/(20 pi) q,
+// which times Rd is s up to the rounding of the product's order.
+template <typename T>
+struct ShadingCoefficients {
+  T transmittance;  // q = 1 - R0: the coat passes 1 - F(mu) = q g(mu), so F L = L - q gL
+  T diffuse;        // s = 21/(20 pi) Rd q, the weight of gE
 
-// The diffuse term 21/(20 pi) Rd (1 - R0) gE.
-template <typename T, typename S>
-T polished_diffuse_radiance(T R0, T Rd, const ShadingBasis<S>& basis) {
-  return T(kDiffuseNormalisation) * Rd * (T(1) - R0) * T(basis.gE);
-}
+  explicit ShadingCoefficients(T R0, T Rd = T(1))
+      : transmittance(T(1) - R0), diffuse(T(kDiffuseNormalisation) * Rd * transmittance) {}
 
-// Full outgoing radiance for one channel: mirror term plus diffuse term.
-template <typename T, typename S>
-T polished_radiance(T R0, T Rd, const ShadingBasis<S>& basis) {
-  return polished_specular_radiance(R0, basis) + polished_diffuse_radiance(R0, Rd, basis);
-}
+  // The mirror term F L = L - q gL.
+  template <typename S>
+  T specular_radiance(const ShadingBasis<S>& basis) const {
+    return T(basis.L) - transmittance * T(basis.gL);
+  }
+  // The diffuse term s gE.
+  template <typename S>
+  T diffuse_radiance(const ShadingBasis<S>& basis) const {
+    return diffuse * T(basis.gE);
+  }
+  // Full outgoing radiance: mirror term plus diffuse term.
+  template <typename S>
+  T radiance(const ShadingBasis<S>& basis) const {
+    return specular_radiance(basis) + diffuse_radiance(basis);
+  }
+};
 
 // RGB over one ray.
 inline RGB polished_radiance(const PolishedMaterial& material, float mu_o, const RGB& L_reflected, const RGB& E) {
   RGB result;
-  for (int c = 0; c < 3; ++c)
-    result[c] = polished_radiance(material.R0(), material.Rd()[c], ShadingBasis<float>(mu_o, L_reflected[c], E[c]));
+  for (int c = 0; c < 3; ++c) {
+    const ShadingCoefficients<float> coefficients(material.R0(), material.Rd()[c]);
+    result[c] = coefficients.radiance(ShadingBasis<float>(mu_o, L_reflected[c], E[c]));
+  }
   return result;
 }
 

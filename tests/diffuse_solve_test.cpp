@@ -31,7 +31,8 @@ Samples shade_sphere(const PolishedMaterial& material, float noise, uint64_t see
     RGB basis;
     const RGB E = diffuse_sum(n);
     const RGB L = office.eval(reflect(v, n));
-    for (int c = 0; c < 3; ++c) basis[c] = polished_diffuse_radiance(material.R0(), 1.0f, ShadingBasis<float>(mu, L[c], E[c]));
+    const ShadingCoefficients<float> per_unit_Rd(material.R0());
+    for (int c = 0; c < 3; ++c) basis[c] = per_unit_Rd.diffuse_radiance(ShadingBasis<float>(mu, L[c], E[c]));
     const RGB exact = polished_radiance(material, mu, office.eval(reflect(v, n)), E);
     samples.observed.push_back(exact * (1.0f + noise * (2 * rng.next_float() - 1)));
     samples.specular.push_back(specular);

@@ -174,6 +174,24 @@ TEST(Material, SampleWeightsArePdfConsistentAndUnbiased) {
   }
 }
 
+// The lobe's weight that the path tracer's estimators take (material.h) against f_d cos /
+// pdf evaluated from the BRDF and the lobe's density at random directions.
+TEST(DiffuseLobe, WeightIsTheBrdfTimesCosineOverThePdf) {
+  Pcg32 rng(10);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const float R0 = rng.next_float();
+    const PolishedMaterial material(R0, RGB(rng.next_float(), rng.next_float(), rng.next_float()));
+    const Vec3 wo = direction(std::max(rng.next_float(), 1e-3f), 2 * kPi * rng.next_float());
+    const Vec3 wi = direction(std::max(rng.next_float(), 1e-3f), 2 * kPi * rng.next_float());
+    const RGB direct = material.eval_diffuse(wo, wi) * wi.z() / diffuse_lobe_pdf(wi.z());
+    const RGB weight = material.Rd() * diffuse_lobe_weight(R0, wo.z());
+    EXPECT_LT((direct - weight).abs().maxCoeff(), 1e-5f * (1 + direct.abs().maxCoeff())) << "trial " << trial;
+    const auto sample = material.sample_diffuse(wo, Vec2(rng.next_float(), rng.next_float()));
+    ASSERT_TRUE(sample.has_value());
+    EXPECT_EQ((sample->weight - weight).abs().maxCoeff(), 0.0f);
+  }
+}
+
 TEST(Material, StiffParametersGiveFiniteContinuousValues) {
   const float R0s[] = {0.0f, 1e-7f, 0.5f, 1.0f - 1e-7f, 1.0f};
   const float mus[] = {0.0f, 1e-8f, 1e-4f, 1.0f, -0.3f, -1.0f};

@@ -8,7 +8,7 @@
 // recovered materials transfer to other lightings, that a spectral camera shows the
 // pseudo-BRDF colour shift that RGB captures cannot, and that the report and its
 // figures are written. And pseudo_brdf.h's model against closed forms.
-#include "app/pseudo_brdf.h"
+#include "inverse/pseudo_brdf.h"
 #include "renderer/image.h"
 #include "test_support.h"
 

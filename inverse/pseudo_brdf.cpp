@@ -1,4 +1,4 @@
-#include "app/pseudo_brdf.h"
+#include "inverse/pseudo_brdf.h"
 
 #include "renderer/error.h"
 
