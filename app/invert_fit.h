@@ -31,6 +31,8 @@ class FitPreview;  // app/fit_preview.h (built with GLAZE_PREVIEW)
 namespace invert_fit {
 
 nlohmann::json rgb_json(const RGB& c);
+// A capture set's known material as fit.json reports it ("reference_material").
+nlohmann::json material_json(const CaptureMaterial& material);
 nlohmann::json drops_json(const DropCounts& d);
 
 // What every mode starts from: the capture set, its object in the renderer's ray

@@ -21,11 +21,8 @@ namespace {
 
 // The known material of --mode lighting: --R0 and --Rd, else the capture set's.
 PolishedMaterial known_material(const Arguments& args, const CaptureSet& captures) {
-  float R0 = -1.0f;
-  RGB Rd = RGB::Constant(-1.0f);
-  if (captures.material.contains("R0")) R0 = captures.material["R0"].get<float>();
-  if (captures.material.contains("Rd"))
-    for (int c = 0; c < 3; ++c) Rd[c] = captures.material["Rd"][c].get<float>();
+  float R0 = captures.material ? captures.material->material.R0() : -1.0f;
+  RGB Rd = captures.material ? captures.material->material.Rd() : RGB::Constant(-1.0f);
   R0 = args.real("R0", R0);
   if (args.has("Rd")) {
     const std::vector<float> values = args.reals("Rd");
@@ -170,7 +167,7 @@ int invert_lighting(const Arguments& args, const std::filesystem::path& out, boo
     result["reference_L_lm_error_l2"] = worst;  // max |L_lm - true| / L00 over l <= 2
     // The absolute scale: recovered over true L00, per channel.
     result["reference_scale"] = rgb_json((fit.coefficients.values[0] / reference.values[0]).cast<float>());
-    if (!in.captures.material.is_null()) result["reference_material"] = in.captures.material;
+    if (in.captures.material) result["reference_material"] = material_json(*in.captures.material);
     for (const auto& [w, h] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
       if (options.width % w != 0 || options.height % h != 0) continue;
       int cells = 0;
