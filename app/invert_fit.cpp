@@ -56,6 +56,12 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
 
 nlohmann::json rgb_json(const RGB& c) { return {c[0], c[1], c[2]}; }
 
+nlohmann::json material_json(const CaptureMaterial& material) {
+  nlohmann::json entry = {{"R0", material.material.R0()}, {"Rd", rgb_json(material.material.Rd())}};
+  if (!material.texture.empty()) entry["texture"] = material.texture;
+  return entry;
+}
+
 nlohmann::json drops_json(const DropCounts& d) {
   return {{"grazing", d.grazing}, {"silhouette", d.silhouette}, {"non_finite", d.non_finite},
           {"saturated", d.saturated}, {"masked", d.masked}, {"hidden", d.hidden}};
@@ -95,18 +101,12 @@ void write_renders(const InvertFitOptions& args, const FitInputs& in, const Scen
 }
 
 std::pair<int, int> capture_defaults(const CaptureSet& captures, int otherwise_lmax) {
-  const nlohmann::json& r = captures.renderer;
-  auto integer = [&](const char* key, int low, int high, int fallback) {
-    if (!r.contains(key) || !r[key].is_number_integer()) return fallback;
-    const int value = r[key].get<int>();
-    return value >= low && value <= high ? value : fallback;
-  };
-  if (noise_free_captures(captures)) return {integer("ss", 1, 16, 4), integer("lmax", 0, kShMaxLmax, otherwise_lmax)};
+  if (noise_free_captures(captures)) return {captures.renderer->supersampling, captures.renderer->lmax};
   return {4, otherwise_lmax};
 }
 
 bool noise_free_captures(const CaptureSet& captures) {
-  return captures.renderer.is_object() && captures.renderer.value("integrator", "") == "sh";
+  return captures.renderer && captures.renderer->integrator == CaptureRenderer::Integrator::sh;
 }
 
 #if GLAZE_HAVE_PREVIEW

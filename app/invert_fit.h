@@ -61,6 +61,8 @@ struct InvertFitOptions {
 };
 
 nlohmann::json rgb_json(const RGB& c);
+// A capture set's known material as fit.json reports it ("reference_material").
+nlohmann::json material_json(const CaptureMaterial& material);
 nlohmann::json drops_json(const DropCounts& d);
 
 // What every mode starts from: the capture set, its object in the renderer's ray

@@ -22,11 +22,8 @@ namespace {
 
 // The known material of --mode lighting: --R0 and --Rd, else the capture set's.
 PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& captures) {
-  float R0 = -1.0f;
-  RGB Rd = RGB::Constant(-1.0f);
-  if (captures.material.contains("R0")) R0 = captures.material["R0"].get<float>();
-  if (captures.material.contains("Rd"))
-    for (int c = 0; c < 3; ++c) Rd[c] = captures.material["Rd"][c].get<float>();
+  float R0 = captures.material ? captures.material->material.R0() : -1.0f;
+  RGB Rd = captures.material ? captures.material->material.Rd() : RGB::Constant(-1.0f);
   R0 = args.R0.value_or(R0);
   if (!args.Rd.empty()) Rd = RGB(args.Rd[0], args.Rd[1], args.Rd[2]);
   if (R0 < 0.0f || (Rd < 0.0f).any()) {
@@ -137,7 +134,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
     const LightingComparison comparison = compare_lighting(fit, environment);
     result["reference_L_lm_error_l2"] = comparison.L_lm_error_l2;
     result["reference_scale"] = rgb_json(comparison.scale.cast<float>());
-    if (!in.captures.material.is_null()) result["reference_material"] = in.captures.material;
+    if (in.captures.material) result["reference_material"] = material_json(*in.captures.material);
     for (const LightingComparison::MapError& error : comparison.map_errors)
       result["reference_map_error"][std::to_string(error.width) + "x" + std::to_string(error.height)] = {
           {"relative_rmse", error.cells > 0 ? nlohmann::json(error.relative_rmse) : nlohmann::json(nullptr)},

@@ -81,16 +81,12 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
     result["texture"] = file;
     result["texture_resolution"] = {width, height};
     result["coverage"] = texture->coverage;
-    if (captures.material.contains("texture")) {
-      // The set's own texture, when it is a file (relative paths against the set): what
-      // a known-truth experiment compares with. Not fatal when it cannot be read.
-      RGB factor = RGB::Ones();
-      if (captures.material.contains("Rd"))
-        for (int c = 0; c < 3; ++c) factor[c] = captures.material["Rd"][c].get<float>();
-      std::filesystem::path reference(captures.material["texture"].get<std::string>());
-      if (reference.is_relative()) reference = std::filesystem::path(captures.directory) / reference;
+    if (captures.material && !captures.material->texture.empty()) {
+      // The set's own texture, when it is a file: what a known-truth experiment compares
+      // with. Not fatal when it cannot be read.
       try {
-        result["texture_rmse"] = texture_rmse(*texture, read_image(reference.string()), factor);
+        result["texture_rmse"] =
+            texture_rmse(*texture, read_image(captures.material->texture), captures.material->material.Rd());
       } catch (const Error& error) {
         warn(std::string("the capture set's texture cannot be compared: ") + error.what());
       }
@@ -103,7 +99,7 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   result["iterations"] = fit.iterations;
   result["converged"] = fit.converged;
   result["solver"] = fit.brief_report;
-  if (!captures.material.is_null()) result["reference_material"] = captures.material;
+  if (captures.material) result["reference_material"] = material_json(*captures.material);
 
   // Per-view residuals over the samples, then re-renders of the inputs and held-out views.
   nlohmann::json per_view = nlohmann::json::array();
@@ -137,11 +133,10 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   else std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height, 100 * texture->coverage);
   if (result.contains("texture_rmse")) std::printf(", texel RMSE against the reference %.4f", result["texture_rmse"].get<double>());
   std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations, fit.converged ? "converged" : "NOT converged");
-  if (!captures.material.is_null() && captures.material.contains("R0")) {
-    std::printf("true R0 = %.5f", captures.material["R0"].get<double>());
-    if (captures.material.contains("Rd") && !texture)
-      std::printf(", Rd = %.5f %.5f %.5f", captures.material["Rd"][0].get<double>(), captures.material["Rd"][1].get<double>(),
-                  captures.material["Rd"][2].get<double>());
+  if (captures.material) {
+    const PolishedMaterial& truth = captures.material->material;
+    std::printf("true R0 = %.5f", truth.R0());
+    if (!texture) std::printf(", Rd = %.5f %.5f %.5f", truth.Rd()[0], truth.Rd()[1], truth.Rd()[2]);
     std::printf("\n");
   }
   std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));

@@ -44,12 +44,6 @@ struct RenderCommandOptions {
   DisplaySettings display;  // of a picture
 };
 
-nlohmann::json environment_json(const EnvironmentSpec& spec) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({spec.options.to_world(r, 0), spec.options.to_world(r, 1), spec.options.to_world(r, 2)});
-  return {{"scale", spec.options.scale}, {"rotation", spec.options.rotation_degrees}, {"to_world", rows}};
-}
-
 std::string materials_json(const Scene& scene) {
   nlohmann::json list = nlohmann::json::array();
   for (const SceneMaterial& m : scene.materials) {
@@ -110,48 +104,52 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   std::filesystem::create_directories(root / (holdout.empty() ? "" : "holdout"));
 
   // The object: the analytic sphere exactly, else the scene file itself.
-  nlohmann::json object;
+  CaptureSet set;
   if (scene.is_single_convex_object()) {
     const Sphere& s = scene.spheres.front();
-    object = {{"type", "sphere"}, {"center", {s.center.x(), s.center.y(), s.center.z()}}, {"radius", s.radius}};
+    set.object = CaptureSphere{s.center, s.radius};
   } else {
-    object = {{"gltf", std::filesystem::absolute(scene.path).string()}};
+    set.object = CaptureGltf{std::filesystem::absolute(scene.path).string()};
   }
   // The environment: a procedural one is written beside the captures (and named
   // relative to each transforms.json), a file is named by its absolute path.
-  nlohmann::json environment_entry = environment_json(job.environment_spec);
+  CaptureEnvironment environment_entry{{}, {}, job.environment_spec.options};
   const bool procedural = job.environment_spec.source.starts_with("procedural:");
   const std::filesystem::path environment_file =
       procedural ? std::filesystem::absolute(root / "environment.exr") : std::filesystem::absolute(job.environment_spec.source);
   if (procedural) {
     write_image(environment_file.string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
-    environment_entry["procedural"] = job.environment_spec.source.substr(std::string("procedural:").size());
+    environment_entry.procedural = job.environment_spec.source.substr(std::string("procedural:").size());
   }
   // The material, when the object has exactly one.
-  nlohmann::json material;
   std::set<int> used;
   for (const Sphere& s : scene.spheres) used.insert(s.material);
   for (const TriangleMesh& m : scene.meshes) used.insert(m.material);
   if (used.size() == 1) {
     const SceneMaterial& m = scene.materials[*used.begin()];
-    material = {{"R0", m.R0}, {"Rd", {m.Rd[0], m.Rd[1], m.Rd[2]}}};
+    set.material = CaptureMaterial{PolishedMaterial(m.R0, m.Rd), {}};
     if (m.texture >= 0) {
       // As an absolute path when it is a file beside the scene (not embedded data), so
       // that the fit can compare its recovered texture against it.
       const std::filesystem::path file = std::filesystem::absolute(std::filesystem::path(scene.path).parent_path() / scene.textures[m.texture].source);
-      material["texture"] = std::filesystem::exists(file) ? file.string() : scene.textures[m.texture].source;
+      set.material->texture = std::filesystem::exists(file) ? file.string() : scene.textures[m.texture].source;
     }
   }
+  const ShIntegratorOptions& sh = job.options.sh;
+  set.renderer = job.integrator.name() == ShIntegrator::kName
+                     ? CaptureRenderer{.integrator = CaptureRenderer::Integrator::sh,
+                                       .supersampling = sh.supersampling,
+                                       .lmax = sh.lmax}
+                     : CaptureRenderer{.integrator = CaptureRenderer::Integrator::path,
+                                       .spp = job.options.path_render.spp};
 
   for (bool held_out : {false, true}) {
-    CaptureSet set{{}, object, environment_entry, material};
-    const ShIntegratorOptions& sh = job.options.sh;
-    set.renderer = job.integrator.name() == ShIntegrator::kName
-                       ? nlohmann::json{{"integrator", "sh"}, {"ss", sh.supersampling}, {"lmax", sh.lmax}}
-                       : nlohmann::json{{"integrator", "path"}, {"spp", job.options.path_render.spp}};
+    set.frames.clear();
     const std::filesystem::path folder = held_out ? root / "holdout" : root;
-    set.environment["file"] = procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
-                                         : environment_file.string();
+    environment_entry.file = procedural
+                                 ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
+                                 : environment_file.string();
+    set.environment = environment_entry;
     for (const CameraSpec& spec : scene.cameras) {
       const bool is_holdout = std::find(holdout.begin(), holdout.end(), spec.name) != holdout.end();
       if (is_holdout != held_out) continue;

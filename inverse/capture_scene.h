@@ -18,8 +18,8 @@ namespace glaze {
 // `material` so that re-renders show the fitted one.
 Scene capture_object_scene(const CaptureSet& captures, const PolishedMaterial& material);
 
-// The environment of `captures` ("file" or "procedural", with "scale", "rotation",
-// "to_world"), or nothing if the set names none.
+// The environment of `captures` to build: its file, else its procedural map, with its
+// options; or nothing if the set names none.
 std::optional<EnvironmentSpec> capture_environment(const CaptureSet& captures);
 
 }  // namespace glaze

@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 #include "renderer/image_error.h"
+#include "renderer/image_lookup.h"
 #include "renderer/rng.h"
 
 #include <tbb/parallel_for.h>
@@ -99,14 +100,6 @@ Sample make_sample(const SurfaceHit& hit, const Vec3& view, const RGB& observed,
   return {hit.position, hit.normal, view, hit.normal.dot(view), observed, hit.uv, frame, film};
 }
 
-RGB bilinear(const Image& image, float fx, float fy) {
-  const float x = fx - 0.5f, y = fy - 0.5f;
-  const int x0 = std::clamp(int(std::floor(x)), 0, image.width - 1), y0 = std::clamp(int(std::floor(y)), 0, image.height - 1);
-  const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
-  const float tx = std::clamp(x - x0, 0.0f, 1.0f), ty = std::clamp(y - y0, 0.0f, 1.0f);
-  return (1 - ty) * ((1 - tx) * image.at(x0, y0) + tx * image.at(x1, y0)) + ty * ((1 - tx) * image.at(x0, y1) + tx * image.at(x1, y1));
-}
-
 }  // namespace
 
 SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, const Scene& object_scene,
@@ -178,7 +171,8 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
           ++dropped.silhouette;
           continue;
         }
-        const RGB observed = bilinear(image, fx, fy);
+        const RGB observed =
+            bilinear(image, bilinear_footprint(fx, fy, image.width, image.height, Wrap::clamp, Wrap::clamp));
         const bool masked = masked_at(x0, y0) || masked_at(x0 + 1, y0) || masked_at(x0, y0 + 1) || masked_at(x0 + 1, y0 + 1);
         if (view.keep(*hit, -ray.direction, observed, masked, dropped)) kept.push_back(make_sample(*hit, -ray.direction, observed, int(f), Vec2(fx, fy)));
       }

@@ -3,6 +3,8 @@
 #include "renderer/error.h"
 #include "renderer/text_file.h"
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -12,44 +14,82 @@
 #include <utility>
 
 namespace glaze {
+namespace {
 
-nlohmann::json pose_to_json(const Eigen::Affine3f& camera_to_world) {
-  nlohmann::json rows = nlohmann::json::array();
-  const Eigen::Matrix4f m = camera_to_world.matrix();
-  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+using nlohmann::json;
+
+// The keys of the material's parameters, as the registry names them.
+std::string key(MaterialParameter parameter) { return std::string(parameter_spec(parameter).name); }
+
+json rows(const auto& matrix) {
+  json rows = json::array();
+  for (int r = 0; r < matrix.rows(); ++r) {
+    json row = json::array();
+    for (int c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
+    rows.push_back(row);
+  }
   return rows;
 }
 
-namespace {
-
-nlohmann::json intrinsics(const PinholeCamera& c) {
+json intrinsics(const PinholeCamera& c) {
   return {{"w", c.width}, {"h", c.height}, {"fl_x", c.fl_x}, {"fl_y", c.fl_y}, {"cx", c.cx}, {"cy", c.cy}};
+}
+
+json object_json(const CaptureObject& object) {
+  if (const CaptureGltf* gltf = std::get_if<CaptureGltf>(&object)) return {{"gltf", gltf->file}};
+  const CaptureSphere& sphere = std::get<CaptureSphere>(object);
+  return {{"type", "sphere"},
+          {"center", {sphere.center.x(), sphere.center.y(), sphere.center.z()}},
+          {"radius", sphere.radius}};
+}
+
+json environment_json(const CaptureEnvironment& environment) {
+  json entry = {{"scale", environment.options.scale},
+                {"rotation", environment.options.rotation_degrees},
+                {"to_world", rows(environment.options.to_world)}};
+  if (!environment.file.empty()) entry["file"] = environment.file;
+  if (!environment.procedural.empty()) entry["procedural"] = environment.procedural;
+  return entry;
+}
+
+json material_json(const CaptureMaterial& material) {
+  const RGB& Rd = material.material.Rd();
+  json entry = {{key(MaterialParameter::R0), material.material.R0()},
+                {key(MaterialParameter::Rd), {Rd[0], Rd[1], Rd[2]}}};
+  if (!material.texture.empty()) entry["texture"] = material.texture;
+  return entry;
+}
+
+json renderer_json(const CaptureRenderer& renderer) {
+  if (renderer.integrator == CaptureRenderer::Integrator::sh)
+    return {{"integrator", "sh"}, {"ss", renderer.supersampling}, {"lmax", renderer.lmax}};
+  return {{"integrator", "path"}, {"spp", renderer.spp}};
 }
 
 }  // namespace
 
 void write_transforms(const std::string& directory, const CaptureSet& captures) {
   if (captures.frames.empty()) throw Error(directory + ": a capture set needs at least one frame");
-  nlohmann::json root = nlohmann::json::object();
-  const nlohmann::json shared = intrinsics(captures.frames.front().camera);
+  json root = json::object();
+  const json shared = intrinsics(captures.frames.front().camera);
   bool all_shared = true;
   for (const CaptureFrame& frame : captures.frames) all_shared = all_shared && intrinsics(frame.camera) == shared;
   if (all_shared) root.update(shared);
   if (captures.saturation) root["saturation"] = *captures.saturation;
-  nlohmann::json frames = nlohmann::json::array();
+  json frames = json::array();
   for (const CaptureFrame& frame : captures.frames) {
-    nlohmann::json entry = {{"file_path", frame.file_path},
-                            {"camera", frame.camera.name},
-                            {"transform_matrix", pose_to_json(frame.camera.camera_to_world)}};
+    json entry = {{"file_path", frame.file_path},
+                  {"camera", frame.camera.name},
+                  {"transform_matrix", rows(frame.camera.camera_to_world.matrix())}};
     if (!frame.mask_path.empty()) entry["mask_path"] = frame.mask_path;
     if (!all_shared) entry.update(intrinsics(frame.camera));
     frames.push_back(entry);
   }
   root["frames"] = frames;
-  root["object"] = captures.object;
-  if (!captures.environment.is_null()) root["environment"] = captures.environment;
-  if (!captures.material.is_null()) root["material"] = captures.material;
-  if (!captures.renderer.is_null()) root["renderer"] = captures.renderer;
+  root["object"] = object_json(captures.object);
+  if (captures.environment) root["environment"] = environment_json(*captures.environment);
+  if (captures.material) root["material"] = material_json(*captures.material);
+  if (captures.renderer) root["renderer"] = renderer_json(*captures.renderer);
 
   write_text_atomically((std::filesystem::path(directory) / "transforms.json").string(), root.dump(2) + "\n");
 }
@@ -62,7 +102,6 @@ void write_transforms(const std::string& directory, const CaptureSet& captures) 
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 [[noreturn]] void fail(const std::string& where, const std::string& problem) { throw Error(where + ": " + problem); }
 
@@ -74,14 +113,27 @@ struct Range {
   double low, high;
   bool low_excluded;
   bool integer;
-  const char* text;
+  std::string text;
 };
 constexpr double kFloatMax = std::numeric_limits<float>::max();
-constexpr Range kFinite{-kFloatMax, kFloatMax, false, false, "a finite number"};
-constexpr Range kPositive{0.0, kFloatMax, true, false, "a finite number > 0"};
-constexpr Range kNonNegative{0.0, kFloatMax, false, false, "a finite number >= 0"};
-constexpr Range kUnit{0.0, 1.0, false, false, "a number in [0, 1]"};
-constexpr Range kPixels{1.0, 65536.0, false, true, "a whole number of pixels from 1 to 65536"};
+const Range kFinite{-kFloatMax, kFloatMax, false, false, "a finite number"};
+const Range kPositive{0.0, kFloatMax, true, false, "a finite number > 0"};
+const Range kNonNegative{0.0, kFloatMax, false, false, "a finite number >= 0"};
+const Range kPixels{1.0, 65536.0, false, true, "a whole number of pixels from 1 to 65536"};
+// Counts held exactly by a float.
+const Range kCount{1.0, 16777216.0, false, true, "a whole number from 1 to 16777216"};
+const Range kLmax{0.0, double(kShMaxLmax), false, true, "a whole number from 0 to " + std::to_string(kShMaxLmax)};
+
+// A material parameter (material.h) within its bounds.
+Range parameter_range(MaterialParameter parameter) {
+  const ParameterSpec& spec = parameter_spec(parameter);
+  const auto text = [](double x) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", x);
+    return std::string(buffer);
+  };
+  return {spec.lower, spec.upper, false, false, "a number in [" + text(spec.lower) + ", " + text(spec.upper) + "]"};
+}
 
 // Every number in the file is read through here: a JSON number within `range`.
 float number(const json& value, const std::string& where, const std::string& key, const Range& range) {
@@ -153,17 +205,22 @@ class TransformsReader {
     set.environment = environment();
     set.material = material();
     if (root_.contains("saturation")) set.saturation = number(root_.at("saturation"), file_, "saturation", kPositive);
-    if (root_.contains("renderer") && root_.at("renderer").is_object()) set.renderer = root_.at("renderer");
+    set.renderer = renderer();
     return set;
   }
 
  private:
-  // A path named in the file: resolved against its directory (operator/ keeps absolute
-  // paths as they are); it must name an existing file.
-  std::string existing_file(const json& value, const std::string& where, const std::string& key) const {
+  // A path named in the file, resolved against its directory (operator/ keeps absolute
+  // paths as they are).
+  fs::path resolved_file(const json& value, const std::string& where, const std::string& key) const {
     if (!value.is_string() || value.get<std::string>().empty())
       fail(where, quoted(key) + " must be a file name (a non-empty string), not " + value.dump());
-    const fs::path resolved = directory_ / value.get<std::string>();
+    return directory_ / value.get<std::string>();
+  }
+
+  // The same, which must name an existing file.
+  std::string existing_file(const json& value, const std::string& where, const std::string& key) const {
+    const fs::path resolved = resolved_file(value, where, key);
     std::error_code ec;
     if (!fs::is_regular_file(resolved, ec))
       fail(where, quoted(key) + " names " + resolved.string() +
@@ -262,51 +319,87 @@ class TransformsReader {
     return pose;
   }
 
-  json object() const {
+  CaptureObject object() const {
     const std::string shapes = "{\"type\": \"sphere\", \"center\": [x, y, z], \"radius\": r} or {\"gltf\": FILE}";
-    json object = member(root_, "object", file_, "what was photographed: " + shapes);
+    const json& object = member(root_, "object", file_, "what was photographed: " + shapes);
     const std::string where = file_ + ": \"object\"";
     const bool gltf = object.is_object() && object.contains("gltf");
     const bool typed = object.is_object() && object.contains("type");
     if (gltf == typed || (typed && object["type"] != "sphere")) fail(where, "must be " + shapes + ", not " + object.dump());
-    if (gltf) {
-      object["gltf"] = existing_file(object["gltf"], where, "gltf");
-    } else {
-      numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kFinite);
-      number(member(object, "radius", where, "the sphere's radius"), where, "radius", kPositive);
-    }
-    return object;
+    if (gltf) return CaptureGltf{existing_file(object["gltf"], where, "gltf")};
+    const std::vector<float> center =
+        numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kFinite);
+    return CaptureSphere{Vec3(center[0], center[1], center[2]),
+                         number(member(object, "radius", where, "the sphere's radius"), where, "radius", kPositive)};
   }
 
-  json environment() const {
-    if (!root_.contains("environment")) return nullptr;
-    json environment = root_.at("environment");
+  std::optional<CaptureEnvironment> environment() const {
+    if (!root_.contains("environment")) return std::nullopt;
+    const json& entry = root_.at("environment");
     const std::string where = file_ + ": \"environment\"";
-    if (!environment.is_object() || !(environment.contains("file") || environment.contains("procedural")))
-      fail(where, "must be {\"file\": FILE, ...} or {\"procedural\": NAME, ...}, not " + environment.dump());
-    if (environment.contains("file")) environment["file"] = existing_file(environment["file"], where, "file");
-    if (environment.contains("procedural") && !environment["procedural"].is_string())
-      fail(where, "\"procedural\" must be the name of a procedural environment (a string), not " +
-                      environment["procedural"].dump());
-    if (environment.contains("scale")) number(environment["scale"], where, "scale", kNonNegative);
-    if (environment.contains("rotation")) number(environment["rotation"], where, "rotation", kFinite);
-    if (environment.contains("to_world")) {
-      const json& rows = environment["to_world"];
+    if (!entry.is_object() || !(entry.contains("file") || entry.contains("procedural")))
+      fail(where, "must be {\"file\": FILE, ...} or {\"procedural\": NAME, ...}, not " + entry.dump());
+    CaptureEnvironment environment;
+    if (entry.contains("file")) environment.file = existing_file(entry["file"], where, "file");
+    if (entry.contains("procedural")) {
+      if (!entry["procedural"].is_string())
+        fail(where, "\"procedural\" must be the name of a procedural environment (a string), not " +
+                        entry["procedural"].dump());
+      environment.procedural = entry["procedural"].get<std::string>();
+    }
+    if (entry.contains("scale")) environment.options.scale = number(entry["scale"], where, "scale", kNonNegative);
+    if (entry.contains("rotation"))
+      environment.options.rotation_degrees = number(entry["rotation"], where, "rotation", kFinite);
+    if (entry.contains("to_world")) {
+      const json& rows = entry["to_world"];
       if (!rows.is_array() || rows.size() != 3)
         fail(where, "\"to_world\" must be 3 rows of 3 numbers (a rotation, row-major), not " + rows.dump());
-      for (int r = 0; r < 3; ++r) numbers(rows[r], 3, where, "to_world[" + std::to_string(r) + "]", kFinite);
+      for (int r = 0; r < 3; ++r) {
+        const std::vector<float> row = numbers(rows[r], 3, where, "to_world[" + std::to_string(r) + "]", kFinite);
+        for (int c = 0; c < 3; ++c) environment.options.to_world(r, c) = row[c];
+      }
     }
     return environment;
   }
 
-  json material() const {
-    if (!root_.contains("material")) return nullptr;
-    const json& material = root_.at("material");
+  std::optional<CaptureMaterial> material() const {
+    if (!root_.contains("material")) return std::nullopt;
+    const json& entry = root_.at("material");
     const std::string where = file_ + ": \"material\"";
-    if (!material.is_object()) fail(where, "must be {\"R0\": x, \"Rd\": [r, g, b]}, not " + material.dump());
-    number(member(material, "R0", where, "the specular reflectance at normal incidence"), where, "R0", kUnit);
-    numbers(member(material, "Rd", where, "the diffuse albedo [r, g, b]"), 3, where, "Rd", kUnit);
+    const std::string R0 = key(MaterialParameter::R0), Rd = key(MaterialParameter::Rd);
+    if (!entry.is_object())
+      fail(where, "must be {" + quoted(R0) + ": x, " + quoted(Rd) + ": [r, g, b]}, not " + entry.dump());
+    const float specular = number(member(entry, R0, where, "the specular reflectance at normal incidence"), where, R0,
+                                  parameter_range(MaterialParameter::R0));
+    const std::vector<float> diffuse = numbers(member(entry, Rd, where, "the diffuse albedo [r, g, b]"), 3, where, Rd,
+                                               parameter_range(MaterialParameter::Rd));
+    CaptureMaterial material{PolishedMaterial(specular, RGB(diffuse[0], diffuse[1], diffuse[2])), {}};
+    // The texture is for comparisons only: it need not exist (embedded in a .glb, say).
+    if (entry.contains("texture")) material.texture = resolved_file(entry["texture"], where, "texture").string();
     return material;
+  }
+
+  std::optional<CaptureRenderer> renderer() const {
+    if (!root_.contains("renderer")) return std::nullopt;
+    const json& entry = root_.at("renderer");
+    const std::string where = file_ + ": \"renderer\"";
+    const std::string forms =
+        "{\"integrator\": \"path\", \"spp\": N} or {\"integrator\": \"sh\", \"ss\": K, \"lmax\": L}";
+    if (!entry.is_object()) fail(where, "must be " + forms + ", not " + entry.dump());
+    const json& integrator = member(entry, "integrator", where, "\"path\" or \"sh\"");
+    CaptureRenderer renderer;
+    if (integrator == "path") {
+      renderer.integrator = CaptureRenderer::Integrator::path;
+      renderer.spp = int(number(member(entry, "spp", where, "the samples per pixel"), where, "spp", kCount));
+    } else if (integrator == "sh") {
+      renderer.integrator = CaptureRenderer::Integrator::sh;
+      const json& supersampling = member(entry, "ss", where, "the K of its K x K rays per pixel");
+      renderer.supersampling = int(number(supersampling, where, "ss", kCount));
+      renderer.lmax = int(number(member(entry, "lmax", where, "the band of its diffuse term"), where, "lmax", kLmax));
+    } else {
+      fail(where, "\"integrator\" must be \"path\" or \"sh\", not " + integrator.dump());
+    }
+    return renderer;
   }
 
   std::string file_;

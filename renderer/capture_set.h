@@ -1,6 +1,8 @@
-// capture_set.h: capture sets (DESIGN §4), nerfstudio-style: a directory with
+// capture_set.h: capture sets (docs/design.md §4), nerfstudio-style: a directory with
 // transforms.json and the HDR images it names. `glaze render --captures` writes them;
-// the inverse module reads them. One format, one implementation, used both ways.
+// the inverse module reads them. One format, one implementation, used both ways: the
+// file's JSON stays in capture_set.cpp, and everyone else sees the C++ types below,
+// checked once when the file is read.
 //
 //   { "w": 512, "h": 512, "fl_x": .., "fl_y": .., "cx": ..,  "cy": ..,   (or per frame)
 //     "saturation": s,                          (optional: pixel values >= s are saturated)
@@ -8,8 +10,10 @@
 //                  "transform_matrix": [[4x4 row-major camera-to-world, OpenGL axes]],
 //                  "mask_path": "mask_000.png" (optional)} ],
 //     "object": {"type": "sphere", "center": [x, y, z], "radius": r}  or  {"gltf": FILE},
-//     "environment": {"file": FILE or "procedural": NAME, "scale": s, "rotation": degrees},
-//     "material": {"R0": x, "Rd": [r, g, b]} }    (both optional; material: a known one)
+//     "environment": {"file": FILE and/or "procedural": NAME, "scale": s, "rotation": degrees,
+//                     "to_world": [[3x3 row-major rotation]]},                    (optional)
+//     "material": {"R0": x, "Rd": [r, g, b], "texture": FILE (optional)},       (optional)
+//     "renderer": {"integrator": "path", "spp": N} or {"integrator": "sh", "ss": K, "lmax": L} }
 //
 // Relative paths are relative to the directory holding transforms.json. A per-frame
 // intrinsic overrides the top-level one. The camera is a pinhole: "camera_model" may only
@@ -17,11 +21,12 @@
 #pragma once
 
 #include "renderer/camera.h"
-
-#include <nlohmann/json.hpp>
+#include "renderer/environment.h"
+#include "renderer/material.h"
 
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace glaze {
@@ -32,18 +37,49 @@ struct CaptureFrame {
   std::string mask_path;   // optional; as read: resolved
 };
 
+// What was photographed ("object"): an analytic sphere, or a glTF scene.
+struct CaptureSphere {
+  Vec3 center = Vec3::Zero();
+  float radius = 1.0f;
+};
+struct CaptureGltf {
+  std::string file;  // as read: resolved
+};
+using CaptureObject = std::variant<CaptureSphere, CaptureGltf>;
+
+// The lighting the images were taken under ("environment"), as make_environment() builds
+// it: a lat-long map file, else the procedural map of that name; a file rendered from a
+// procedural map names both.
+struct CaptureEnvironment {
+  std::string file;            // empty: none; as read: resolved
+  std::string procedural;      // empty: none
+  EnvironmentOptions options;  // "scale", "rotation" (degrees), "to_world"
+};
+
+// The object's known material ("material"), its keys the names of the material's
+// parameters (kMaterialParameters).
+struct CaptureMaterial {
+  PolishedMaterial material;
+  std::string texture;  // optional: the diffuse texture's image (then Rd is its factor); as read: resolved
+};
+
+// How glaze rendered the images ("renderer"), so that invert-fit models the pixels to match.
+struct CaptureRenderer {
+  enum class Integrator { path, sh };
+  Integrator integrator = Integrator::path;
+  int spp = 1;            // path: samples per pixel ("spp")
+  int supersampling = 1;  // sh: the K x K sub-pixel grid of each pixel ("ss")
+  int lmax = 0;           // sh: the band its diffuse term was cut at
+};
+
 struct CaptureSet {
   std::vector<CaptureFrame> frames;
-  nlohmann::json object;       // {"type": "sphere", ...} or {"gltf": ...} (as read: resolved)
-  nlohmann::json environment;  // optional: {"file": ..., "scale": ..., "rotation": ...} (as read: resolved)
-  nlohmann::json material;     // optional: {"R0": ..., "Rd": [...]}
-  // Default-initialised so that aggregate initialisers naming only the members above
-  // (glaze render --captures) stay free of -Wmissing-field-initializers.
-  std::string directory = {};            // holding the transforms.json read; empty if built in memory
-  std::optional<float> saturation = {};  // pixel values at or above it are saturated
-  // Optional: how glaze rendered the images, {"integrator": "sh", "ss": K, "lmax": L} or
-  // {"integrator": "path", "spp": N}; invert-fit models the pixels to match.
-  nlohmann::json renderer = {};
+  CaptureObject object;
+  std::optional<CaptureEnvironment> environment;
+  std::optional<CaptureMaterial> material;
+  std::optional<CaptureRenderer> renderer;
+  std::string directory;            // holding the transforms.json read; empty if built in memory
+  std::optional<float> saturation;  // pixel values at or above it are saturated
 };
 
 // Writes DIRECTORY/transforms.json (atomically). Intrinsics shared by every frame are
@@ -51,12 +87,9 @@ struct CaptureSet {
 void write_transforms(const std::string& directory, const CaptureSet& captures);
 
 // Reads PATH, a transforms.json or a directory holding one, checking everything above
-// (files exist, poses are rigid, numbers are finite and in range). File paths come back
-// resolved against the file's directory, ready to open. Throws glaze::Error naming the
-// file, the frame and the key at fault.
+// (files exist, poses are rigid, numbers are finite and in range, values have their
+// types). File paths come back resolved against the file's directory, ready to open.
+// Throws glaze::Error naming the file, the frame and the key at fault.
 CaptureSet read_transforms(const std::string& path);
-
-// The JSON form of a camera-to-world pose: a 4x4 row-major array.
-nlohmann::json pose_to_json(const Eigen::Affine3f& camera_to_world);
 
 }  // namespace glaze

@@ -59,7 +59,8 @@ Vec3 Environment::uv_to_direction(const Vec2& uv) const {
 void Environment::prefetch(const EnvironmentLookup& at, bool density) const {
   const float* texels = map_.pixels.data();
   // One line per row of the footprint: x0 and x1 share it but for one texel in 5.
-  for (int y : {at.y0, at.y1}) __builtin_prefetch(texels + (size_t(y) * map_.width + at.x0) * 3);
+  const BilinearFootprint& footprint = at.footprint;
+  for (int y : {footprint.y0, footprint.y1}) __builtin_prefetch(texels + (size_t(y) * map_.width + footprint.x0) * 3);
   if (density) sampling().texels.prefetch(at.texel);
 }
 

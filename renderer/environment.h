@@ -1,14 +1,16 @@
-// environment.h: distant lighting from a lat-long map (DESIGN §3), the one environment
+// environment.h: distant lighting from a lat-long map (docs/design.md §3), the one environment
 // lookup used by the path tracer, the SH integrator and the inverse fits.
 //
 // A world direction w (pointing away from the scene) is turned into the map's frame,
 // d = local_to_world^T w, then u = atan2(d.x, -d.z) / (2 pi) mod 1, v = acos(d.y) / pi;
 // texel (i, j) has its centre at ((i + 0.5) / W, (j + 0.5) / H), row 0 is the top (+Y).
-// Lookups are bilinear, wrapping in u and clamping in v. local_to_world is the
-// `rotation` option (degrees about +Y, +Z turning towards +X) applied after `to_world`.
+// Lookups are bilinear (image_lookup.h), wrapping in u and clamping in v. local_to_world
+// is the `rotation` option (degrees about +Y, +Z turning towards +X) applied after
+// `to_world`.
 #pragma once
 
 #include "renderer/image.h"
+#include "renderer/image_lookup.h"
 #include "renderer/lanes.h"
 #include "renderer/latlong.h"
 #include "renderer/math.h"
@@ -33,8 +35,7 @@ struct EnvironmentOptions {
 // A direction located in the map: what eval() and pdf() read, computed once so that a
 // caller can prefetch the texels (see prefetch()) and do other work while they arrive.
 struct EnvironmentLookup {
-  int x0, x1, y0, y1;  // the bilinear footprint's texels
-  float fx, fy;        // and the weights of x1, y1
+  BilinearFootprint footprint;  // the map's texels eval() blends
   Vec2 uv;
   float sin_theta;
   int texel;           // row-major index of the texel containing uv (its sampling density)
@@ -61,29 +62,14 @@ class Environment {
 
   // Radiance arriving from world direction w (scale included).
   RGB eval(const Vec3& w) const { return eval(locate(w)); }
-  RGB eval(const EnvironmentLookup& at) const {
-    const RGB top = (1.0f - at.fx) * map_.at(at.x0, at.y0) + at.fx * map_.at(at.x1, at.y0);
-    const RGB bottom = (1.0f - at.fx) * map_.at(at.x0, at.y1) + at.fx * map_.at(at.x1, at.y1);
-    return scale_ * ((1.0f - at.fy) * top + at.fy * bottom);
-  }
+  RGB eval(const EnvironmentLookup& at) const { return scale_ * bilinear(map_, at.footprint); }
 
   // Inline and free of branches, so that a loop locating many directions vectorises.
   [[gnu::always_inline]] EnvironmentLookup locate(const Vec3& w) const {
     const Vec3 d = local_to_world_.transpose() * w;
     EnvironmentLookup at;
     at.uv = direction_to_latlong(d, &at.sin_theta);
-    const float x = at.uv.x() * map_.width - 0.5f, y = at.uv.y() * map_.height - 0.5f;
-    const float x_floor = std::floor(x), y_floor = std::floor(y);
-    at.fx = x - x_floor;
-    at.fy = y - y_floor;
-    // Texel indices worked out in float (exact for any map size) and converted last:
-    // mixed int arithmetic keeps GCC from vectorising a loop of lookups.
-    const float width = float(map_.width), last_row = float(map_.height - 1);
-    const float x0 = x_floor < 0.0f ? x_floor + width : x_floor;  // x_floor is in [-1, width - 1]
-    at.x0 = static_cast<int>(x0);
-    at.x1 = static_cast<int>(x0 + 1.0f == width ? 0.0f : x0 + 1.0f);
-    at.y0 = static_cast<int>(std::clamp(y_floor, 0.0f, last_row));
-    at.y1 = static_cast<int>(std::clamp(y_floor + 1.0f, 0.0f, last_row));
+    at.footprint = bilinear_footprint(at.uv, map_.width, map_.height, Wrap::repeat, Wrap::clamp);
     at.texel = texel_of(at.uv, map_.width, map_.height);
     return at;
   }
@@ -163,12 +149,12 @@ struct EnvironmentLookups {
   [[gnu::always_inline]] void locate(const Environment& environment, const Directions& d) {
     for (int k = 0; k < kLanes; ++k) {
       const EnvironmentLookup at = environment.locate(Vec3(d.x[k], d.y[k], d.z[k]));
-      x0[k] = at.x0;
-      x1[k] = at.x1;
-      y0[k] = at.y0;
-      y1[k] = at.y1;
-      fx[k] = at.fx;
-      fy[k] = at.fy;
+      x0[k] = at.footprint.x0;
+      x1[k] = at.footprint.x1;
+      y0[k] = at.footprint.y0;
+      y1[k] = at.footprint.y1;
+      fx[k] = at.footprint.fx;
+      fy[k] = at.footprint.fy;
       u[k] = at.uv.x();
       v[k] = at.uv.y();
       sin_theta[k] = at.sin_theta;
@@ -176,7 +162,7 @@ struct EnvironmentLookups {
     }
   }
   EnvironmentLookup operator[](int k) const {
-    return {x0[k], x1[k], y0[k], y1[k], fx[k], fy[k], Vec2(u[k], v[k]), sin_theta[k], texel[k]};
+    return {{x0[k], x1[k], y0[k], y1[k], fx[k], fy[k]}, Vec2(u[k], v[k]), sin_theta[k], texel[k]};
   }
 };
 

@@ -127,8 +127,12 @@ class GltfLoader {
         }
       }
       if (const Value* glaze = member(source.extras, "glaze")) {
-        if (const Value* R0 = member(*glaze, "R0")) material.R0 = float(number(*R0, what + " extras.glaze.R0"));
-        if (const Value* Rd = member(*glaze, "Rd")) material.Rd = rgb(*Rd, what + " extras.glaze.Rd");
+        // Keyed by the material's parameter names (kMaterialParameters).
+        const std::string R0_key(parameter_spec(MaterialParameter::R0).name);
+        const std::string Rd_key(parameter_spec(MaterialParameter::Rd).name);
+        if (const Value* R0 = member(*glaze, R0_key.c_str()))
+          material.R0 = float(number(*R0, what + " extras.glaze." + R0_key));
+        if (const Value* Rd = member(*glaze, Rd_key.c_str())) material.Rd = rgb(*Rd, what + " extras.glaze." + Rd_key);
       }
       try {
         PolishedMaterial(material.R0, material.Rd.min(1.0f));  // validates R0 and the sign of Rd

@@ -206,10 +206,9 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
   const CaptureSet captures = read_transforms(benchmark_captures("white_sphere_office", "novel_0,novel_1"));
   const Scene scene = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   const RayTracer tracer(scene);
-  const PolishedMaterial material(captures.material["R0"].get<float>(), RGB(captures.material["Rd"][0].get<float>(),
-                                  captures.material["Rd"][1].get<float>(), captures.material["Rd"][2].get<float>()));
+  const PolishedMaterial& material = captures.material->material;
   const bool photographs = diffuse_lmax > 4;
-  const int footprint = photographs ? 4 : captures.renderer.value("ss", 1);
+  const int footprint = photographs ? 4 : captures.renderer->supersampling;
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/!photographs);
@@ -250,7 +249,7 @@ void joint_fit_benchmark(benchmark::State& state, bool band_limited) {
   LightingFitOptions options;
   JointFitOptions joint;
   joint.band_limited_diffuse = band_limited;
-  const int footprint = captures.renderer.value("ss", 1);
+  const int footprint = captures.renderer->supersampling;
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     // Band-limited: as noise-free captures; the other with the data-driven noise model, as

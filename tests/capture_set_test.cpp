@@ -17,7 +17,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace glaze {
@@ -61,8 +63,15 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 
 json sphere_object() { return {{"type", "sphere"}, {"center", {0.0, 0.0, 0.0}}, {"radius", 1.0}}; }
 
+// A camera-to-world pose as transforms.json writes it: 4 rows of 4 numbers.
+json pose_json(const Eigen::Affine3f& pose) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({pose(r, 0), pose(r, 1), pose(r, 2), pose(r, 3)});
+  return rows;
+}
+
 json frame_json(const std::string& file, const Eigen::Affine3f& pose) {
-  return {{"file_path", file}, {"transform_matrix", pose_to_json(pose)}};
+  return {{"file_path", file}, {"transform_matrix", pose_json(pose)}};
 }
 
 // A valid set in `dir`: shared intrinsics, two 4x3 views (their images written), a sphere.
@@ -112,6 +121,11 @@ CaptureSet read_back(const TemporaryDirectory& dir, const json& transforms) {
   return read_transforms(dir.path().string());
 }
 
+void expect_same_material(const PolishedMaterial& read, const PolishedMaterial& written) {
+  EXPECT_EQ(read.R0(), written.R0());
+  EXPECT_TRUE((read.Rd() == written.Rd()).all()) << read.Rd().transpose() << " written " << written.Rd().transpose();
+}
+
 void expect_same_camera(const PinholeCamera& read, const PinholeCamera& written) {
   EXPECT_EQ(read.name, written.name);
   EXPECT_EQ(read.width, written.width) << written.name;
@@ -132,9 +146,9 @@ void expect_same_camera(const PinholeCamera& read, const PinholeCamera& written)
 TEST(CaptureSet, RoundTripWithSharedIntrinsics) {
   TemporaryDirectory dir;
   CaptureSet set;
-  set.object = sphere_object();
-  set.environment = {{"procedural", "constant"}, {"scale", 2.0}, {"rotation", 30.0}};
-  set.material = {{"R0", 0.04}, {"Rd", {0.6, 0.5, 0.4}}};
+  set.object = CaptureSphere{Vec3(0.25f, -1, 3), 1.5f};
+  set.environment = CaptureEnvironment{"", "constant", {2.0f, 30.0f}};
+  set.material = CaptureMaterial{PolishedMaterial(0.04f, RGB(0.6f, 0.5f, 0.4f)), ""};
   set.saturation = 60000.0f;
   const std::vector<Eigen::Affine3f> poses = {rigid(0, Vec3::UnitY(), Vec3(0, 0, 4)),
                                               rigid(90, Vec3::UnitY(), Vec3(4, 0.5f, 0)),
@@ -160,9 +174,20 @@ TEST(CaptureSet, RoundTripWithSharedIntrinsics) {
   EXPECT_EQ(back.directory, dir.path().string());
   ASSERT_TRUE(back.saturation.has_value());
   EXPECT_EQ(*back.saturation, 60000.0f);
-  EXPECT_EQ(back.object, set.object);
-  EXPECT_EQ(back.environment, set.environment);
-  EXPECT_EQ(back.material, set.material);
+  const CaptureSphere* sphere = std::get_if<CaptureSphere>(&back.object);
+  ASSERT_NE(sphere, nullptr);
+  EXPECT_TRUE(sphere->center == Vec3(0.25f, -1, 3)) << sphere->center.transpose();
+  EXPECT_EQ(sphere->radius, 1.5f);
+  ASSERT_TRUE(back.environment.has_value());
+  EXPECT_EQ(back.environment->file, "");
+  EXPECT_EQ(back.environment->procedural, "constant");
+  EXPECT_EQ(back.environment->options.scale, 2.0f);
+  EXPECT_EQ(back.environment->options.rotation_degrees, 30.0f);
+  EXPECT_TRUE(back.environment->options.to_world == Mat3::Identity());
+  ASSERT_TRUE(back.material.has_value());
+  expect_same_material(back.material->material, set.material->material);
+  EXPECT_EQ(back.material->texture, "");
+  EXPECT_FALSE(back.renderer.has_value());
 }
 
 // Cameras with different intrinsics: written per frame, read back per frame; without a
@@ -170,7 +195,6 @@ TEST(CaptureSet, RoundTripWithSharedIntrinsics) {
 TEST(CaptureSet, RoundTripWithPerFrameIntrinsics) {
   TemporaryDirectory dir;
   CaptureSet set;
-  set.object = sphere_object();
   write_view(dir, "a.exr");
   write_view(dir, "b.exr");
   set.frames.push_back({"a.exr", camera("wide", 64, 48, 20, 20, 32, 24, rigid(10, Vec3::UnitX(), Vec3(0, 1, 5))), ""});
@@ -185,8 +209,51 @@ TEST(CaptureSet, RoundTripWithPerFrameIntrinsics) {
   ASSERT_EQ(back.frames.size(), 2u);
   for (size_t i = 0; i < 2; ++i) expect_same_camera(back.frames[i].camera, set.frames[i].camera);
   EXPECT_FALSE(back.saturation.has_value());
-  EXPECT_TRUE(back.environment.is_null());
-  EXPECT_TRUE(back.material.is_null());
+  EXPECT_FALSE(back.environment.has_value());
+  EXPECT_FALSE(back.material.has_value());
+  EXPECT_FALSE(back.renderer.has_value());
+}
+
+// Every typed field, written and read back: a glTF object (its path resolved), an
+// environment with a file, a procedural name and every option, a material with a
+// texture (resolved, though it need not exist), and each integrator the renderer names.
+TEST(CaptureSet, TypedFieldsComeBackAsWritten) {
+  TemporaryDirectory dir;
+  write_view(dir, "view.exr");
+  write_view(dir, "env.exr");
+  write_text(dir.path() / "object.gltf", "{}");
+  CaptureSet set;
+  set.frames.push_back({"view.exr", camera("cam", 4, 3, 5, 5, 2, 1.5f, rigid(0, Vec3::UnitY(), Vec3(0, 0, 4))), ""});
+  set.object = CaptureGltf{"object.gltf"};
+  const Mat3 to_world = Eigen::AngleAxisf(0.3f, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  set.environment = CaptureEnvironment{"env.exr", "office", {0.75f, -45.5f, to_world}};
+  set.material = CaptureMaterial{PolishedMaterial(0.1f, RGB(0.2f, 0.3f, 0.45f)), "albedo.png"};
+  set.renderer = CaptureRenderer{.integrator = CaptureRenderer::Integrator::sh, .supersampling = 3, .lmax = 7};
+  write_transforms(dir.path().string(), set);
+
+  CaptureSet back = read_transforms(dir.path().string());
+  ASSERT_TRUE(std::holds_alternative<CaptureGltf>(back.object));
+  EXPECT_EQ(std::get<CaptureGltf>(back.object).file, dir.file("object.gltf"));
+  ASSERT_TRUE(back.environment.has_value());
+  EXPECT_EQ(back.environment->file, dir.file("env.exr"));
+  EXPECT_EQ(back.environment->procedural, "office");
+  EXPECT_EQ(back.environment->options.scale, 0.75f);
+  EXPECT_EQ(back.environment->options.rotation_degrees, -45.5f);
+  EXPECT_TRUE(back.environment->options.to_world == to_world) << back.environment->options.to_world;
+  ASSERT_TRUE(back.material.has_value());
+  expect_same_material(back.material->material, set.material->material);
+  EXPECT_EQ(back.material->texture, dir.file("albedo.png"));
+  ASSERT_TRUE(back.renderer.has_value());
+  EXPECT_EQ(back.renderer->integrator, CaptureRenderer::Integrator::sh);
+  EXPECT_EQ(back.renderer->supersampling, 3);
+  EXPECT_EQ(back.renderer->lmax, 7);
+
+  set.renderer = CaptureRenderer{.integrator = CaptureRenderer::Integrator::path, .spp = 64};
+  write_transforms(dir.path().string(), set);
+  back = read_transforms(dir.path().string());
+  ASSERT_TRUE(back.renderer.has_value());
+  EXPECT_EQ(back.renderer->integrator, CaptureRenderer::Integrator::path);
+  EXPECT_EQ(back.renderer->spp, 64);
 }
 
 // A frame's own intrinsic overrides the top-level one; the others stay shared.
@@ -263,9 +330,11 @@ TEST(CaptureSet, PathsAreResolvedAgainstTheFilesDirectory) {
   EXPECT_EQ(set.frames[0].mask_path, (set_dir / "masks/mask_000.png").string());
   EXPECT_EQ(set.frames[1].file_path, (set_dir / "view_001.exr").string());
   EXPECT_EQ(set.frames[1].mask_path, absolute_mask);
-  EXPECT_TRUE(std::filesystem::equivalent(set.object["gltf"].get<std::string>(), dir.path() / "object.gltf"));
-  EXPECT_TRUE(std::filesystem::equivalent(set.environment["file"].get<std::string>(), dir.path() / "env.exr"));
-  EXPECT_EQ(set.environment["scale"], 1.0);
+  ASSERT_TRUE(std::holds_alternative<CaptureGltf>(set.object));
+  EXPECT_TRUE(std::filesystem::equivalent(std::get<CaptureGltf>(set.object).file, dir.path() / "object.gltf"));
+  ASSERT_TRUE(set.environment.has_value());
+  EXPECT_TRUE(std::filesystem::equivalent(set.environment->file, dir.path() / "env.exr"));
+  EXPECT_EQ(set.environment->options.scale, 1.0f);
   // The resolved paths open as they are.
   EXPECT_EQ(read_image(set.frames[0].file_path).width, 4);
 }
@@ -278,10 +347,15 @@ TEST(CaptureSet, ProceduralEnvironmentWithItsFile) {
   json transforms = valid_transforms(dir);
   transforms["environment"] = {{"file", "environment.exr"}, {"procedural", "office"}, {"rotation", -90.0}};
   const CaptureSet set = read_back(dir, transforms);
-  EXPECT_EQ(set.environment["file"], dir.file("environment.exr"));
-  EXPECT_EQ(set.environment["procedural"], "office");
+  ASSERT_TRUE(set.environment.has_value());
+  EXPECT_EQ(set.environment->file, dir.file("environment.exr"));
+  EXPECT_EQ(set.environment->procedural, "office");
+  EXPECT_EQ(set.environment->options.rotation_degrees, -90.0f);
   transforms["environment"] = {{"procedural", "blue-room"}};
-  EXPECT_EQ(read_back(dir, transforms).environment["procedural"], "blue-room");
+  const CaptureSet procedural = read_back(dir, transforms);
+  ASSERT_TRUE(procedural.environment.has_value());
+  EXPECT_EQ(procedural.environment->file, "");
+  EXPECT_EQ(procedural.environment->procedural, "blue-room");
 }
 
 // OPENCV and PINHOLE with zero distortion are pinholes; a pose off orthonormal by float
@@ -658,6 +732,20 @@ TEST(CaptureSet, SphereCenterBeyondFloatIsAnError) {
   EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"center[1]\" must be a finite number"}));
 }
 
+TEST(CaptureSet, SphereRadiusNotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"]["radius"] = "1";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"radius\" must be a finite number > 0"}));
+}
+
+TEST(CaptureSet, GltfNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["object"] = {{"gltf", 5}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"object\"", "\"gltf\" must be a file name"}));
+}
+
 TEST(CaptureSet, MissingGltfFileIsAnError) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
@@ -702,6 +790,20 @@ TEST(CaptureSet, NegativeRdIsAnError) {
   json transforms = valid_transforms(dir);
   transforms["material"] = {{"R0", 0.04}, {"Rd", {0.5, -0.1, 0.5}}};
   EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"Rd[1]\" must be a number in [0, 1]"}));
+}
+
+TEST(CaptureSet, R0NotANumberIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"R0", "0.04"}, {"Rd", {0.5, 0.5, 0.5}}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"R0\" must be a number in [0, 1]", "\"0.04\""}));
+}
+
+TEST(CaptureSet, MaterialTextureNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["material"] = {{"R0", 0.04}, {"Rd", {0.5, 0.5, 0.5}}, {"texture", 5}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"material\"", "\"texture\" must be a file name"}));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -759,7 +861,11 @@ TEST(CaptureSet, EnvironmentToWorldNotThreeRowsOfThreeNumbersIsAnError) {
   EXPECT_TRUE(rejected(dir, transforms, {"\"environment\"", "to_world[2]"}));
   // A well-formed one comes back as it was, for the fit to use.
   transforms["environment"]["to_world"] = {{0, 0, 1}, {0, 1, 0}, {-1, 0, 0}};
-  EXPECT_EQ(read_back(dir, transforms).environment["to_world"], transforms["environment"]["to_world"]);
+  const std::optional<CaptureEnvironment> environment = read_back(dir, transforms).environment;
+  ASSERT_TRUE(environment.has_value());
+  Mat3 expected;
+  expected << 0, 0, 1, 0, 1, 0, -1, 0, 0;
+  EXPECT_TRUE(environment->options.to_world == expected) << environment->options.to_world;
 }
 
 TEST(CaptureSet, ZeroSaturationIsAnError) {
@@ -774,6 +880,58 @@ TEST(CaptureSet, SaturationNotANumberIsAnError) {
   json transforms = valid_transforms(dir);
   transforms["saturation"] = "high";
   EXPECT_TRUE(rejected(dir, transforms, {"\"saturation\" must be a finite number", "\"high\""}));
+}
+
+// ---------------------------------------------------------------------------------------
+// 10. How glaze rendered the images.
+// ---------------------------------------------------------------------------------------
+
+TEST(CaptureSet, RendererNotAnObjectIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["renderer"] = "sh";
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "must be {\"integrator\""}));
+}
+
+TEST(CaptureSet, IntegratorNotAStringIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["renderer"] = {{"integrator", 5}, {"spp", 4}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"integrator\" must be \"path\" or \"sh\", not 5"}));
+}
+
+TEST(CaptureSet, UnknownIntegratorIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["renderer"] = {{"integrator", "bidirectional"}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"integrator\"", "bidirectional"}));
+  transforms["renderer"] = {{"spp", 4}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "no \"integrator\""}));
+}
+
+TEST(CaptureSet, IntegratorWithoutItsSettingsIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["renderer"] = {{"integrator", "path"}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "no \"spp\""}));
+  transforms["renderer"] = {{"integrator", "sh"}, {"lmax", 4}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "no \"ss\""}));
+  transforms["renderer"] = {{"integrator", "sh"}, {"ss", 2}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "no \"lmax\""}));
+}
+
+// Formerly read as "not said" (and the fits' defaults used instead): now each names its key.
+TEST(CaptureSet, IntegratorSettingOfTheWrongTypeIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["renderer"] = {{"integrator", "path"}, {"spp", "many"}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"spp\" must be a whole number", "\"many\""}));
+  transforms["renderer"] = {{"integrator", "sh"}, {"ss", 2.5}, {"lmax", 4}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"ss\" must be a whole number", "2.5"}));
+  transforms["renderer"] = {{"integrator", "sh"}, {"ss", 0}, {"lmax", 4}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"ss\" must be a whole number from 1"}));
+  transforms["renderer"] = {{"integrator", "sh"}, {"ss", 2}, {"lmax", 65}};
+  EXPECT_TRUE(rejected(dir, transforms, {"\"renderer\"", "\"lmax\" must be a whole number from 0 to 64", "65"}));
 }
 
 }  // namespace

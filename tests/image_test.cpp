@@ -1,12 +1,15 @@
-// Tests of image reading and writing: round trips and every kind of bad file.
+// Tests of image reading and writing (round trips and every kind of bad file) and of the
+// bilinear lookup in each wrap mode, against values worked out by hand.
 #include "renderer/environment.h"
 #include "renderer/error.h"
 #include "renderer/image.h"
+#include "renderer/image_lookup.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <vector>
 
 namespace glaze {
 namespace {
@@ -138,6 +141,163 @@ TEST(ImageIo, RealMapsLoadWithTheirDocumentedRange) {
   for (int j = 0; j < map.height; ++j)
     for (int i = 0; i < map.width; ++i) maximum = std::max(maximum, luminance(map.at(i, j)));
   EXPECT_GT(maximum, 1000.0f);  // DESIGN data README: max luminance about 3350
+}
+
+// ---------------------------------------------------------------------------------------
+// The bilinear lookup (image_lookup.h). A 4 x 2 image of powers of two, so that every
+// blend below is exact in float:
+//   row 0:  1   2   4   8
+//   row 1: 16  32  64 128
+// Texel (i, j)'s centre is at (i + 0.5, j + 0.5).
+// ---------------------------------------------------------------------------------------
+
+Image powers_of_two() {
+  Image image(4, 2);
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const float v = float(1 << (i + 4 * j));
+      image.set(i, j, RGB(v, -2.0f * v, 0.5f * v));
+    }
+  return image;
+}
+
+// The red channel of the lookup at pixel coordinates (x, y), checking the other two.
+float lookup(const Image& image, float x, float y, Wrap wrap_x, Wrap wrap_y) {
+  const RGB value = bilinear(image, bilinear_footprint(x, y, image.width, image.height, wrap_x, wrap_y));
+  EXPECT_EQ(value[1], -2.0f * value[0]) << x << ", " << y;
+  EXPECT_EQ(value[2], 0.5f * value[0]) << x << ", " << y;
+  return value[0];
+}
+
+void expect_footprint(const BilinearFootprint& at, int x0, int x1, int y0, int y1, float fx, float fy) {
+  EXPECT_EQ(at.x0, x0);
+  EXPECT_EQ(at.x1, x1);
+  EXPECT_EQ(at.y0, y0);
+  EXPECT_EQ(at.y1, y1);
+  EXPECT_EQ(at.fx, fx);
+  EXPECT_EQ(at.fy, fy);
+}
+
+TEST(ImageLookup, InsideTheImageEveryModeBlendsTheFourTexelsAround) {
+  const Image image = powers_of_two();
+  for (const Wrap wrap : {Wrap::repeat, Wrap::clamp, Wrap::mirrored_repeat}) {
+    // Texel centres give the texel itself.
+    EXPECT_EQ(lookup(image, 1.5f, 0.5f, wrap, wrap), 2.0f);
+    EXPECT_EQ(lookup(image, 2.5f, 1.5f, wrap, wrap), 64.0f);
+    // (1.75, 1): a quarter of the way from column 1 to 2, half way between the rows:
+    // 0.5 (0.75 * 2 + 0.25 * 4) + 0.5 (0.75 * 32 + 0.25 * 64) = 0.5 * 2.5 + 0.5 * 40.
+    expect_footprint(bilinear_footprint(1.75f, 1.0f, 4, 2, wrap, wrap), 1, 2, 0, 1, 0.25f, 0.5f);
+    EXPECT_EQ(lookup(image, 1.75f, 1.0f, wrap, wrap), 21.25f);
+    // Map coordinates are pixel coordinates over the size.
+    expect_footprint(bilinear_footprint(Vec2(1.75f / 4, 0.5f), 4, 2, wrap, wrap), 1, 2, 0, 1, 0.25f, 0.5f);
+  }
+}
+
+TEST(ImageLookup, RepeatTilesTheImage) {
+  const Image image = powers_of_two();
+  // Left of column 0's centre: between column 3 (of the tile before) and column 0.
+  // x = 0.25: 0.25 * 8 + 0.75 * 1; the rows at y = 0.5 are row 0 alone.
+  expect_footprint(bilinear_footprint(0.25f, 0.5f, 4, 2, Wrap::repeat, Wrap::repeat), 3, 0, 0, 1, 0.75f, 0.0f);
+  EXPECT_EQ(lookup(image, 0.25f, 0.5f, Wrap::repeat, Wrap::repeat), 2.75f);
+  // Past the right edge the same again.
+  EXPECT_EQ(lookup(image, 4.25f, 0.5f, Wrap::repeat, Wrap::repeat), 2.75f);
+  // Above row 0's centre: between row 1 and row 0, 0.25 * 32 + 0.75 * 2.
+  expect_footprint(bilinear_footprint(1.5f, 0.25f, 4, 2, Wrap::repeat, Wrap::repeat), 1, 2, 1, 0, 0.0f, 0.75f);
+  EXPECT_EQ(lookup(image, 1.5f, 0.25f, Wrap::repeat, Wrap::repeat), 9.5f);
+  // Any whole number of tiles away (exactly, even 2^20 texels off): the same footprint.
+  for (const float x : {0.25f, 1.75f, 2.875f, 3.5f})
+    for (const float tiles : {-262144.0f, -3.0f, -1.0f, 1.0f, 5.0f, 262144.0f}) {
+      const BilinearFootprint at = bilinear_footprint(x, 1.25f, 4, 2, Wrap::repeat, Wrap::repeat);
+      const BilinearFootprint away = bilinear_footprint(x + 4.0f * tiles, 1.25f + 2.0f * tiles, 4, 2, Wrap::repeat,
+                                                        Wrap::repeat);
+      expect_footprint(away, at.x0, at.x1, at.y0, at.y1, at.fx, at.fy);
+    }
+}
+
+TEST(ImageLookup, ClampContinuesTheEdgeTexels) {
+  const Image image = powers_of_two();
+  // Left of and above texel (0, 0)'s centre, and far beyond: texel (0, 0) alone.
+  expect_footprint(bilinear_footprint(0.25f, 0.25f, 4, 2, Wrap::clamp, Wrap::clamp), 0, 0, 0, 0, 0.75f, 0.75f);
+  EXPECT_EQ(lookup(image, 0.25f, 0.25f, Wrap::clamp, Wrap::clamp), 1.0f);
+  EXPECT_EQ(lookup(image, -5.0f, -9.0f, Wrap::clamp, Wrap::clamp), 1.0f);
+  // Right of and below texel (3, 1)'s centre: texel (3, 1) alone.
+  expect_footprint(bilinear_footprint(4.0f, 2.0f, 4, 2, Wrap::clamp, Wrap::clamp), 3, 3, 1, 1, 0.5f, 0.5f);
+  EXPECT_EQ(lookup(image, 4.0f, 2.0f, Wrap::clamp, Wrap::clamp), 128.0f);
+  // Past one edge only: the edge column, blended between the rows as inside,
+  // 0.5 * 8 + 0.5 * 128.
+  EXPECT_EQ(lookup(image, 7.0f, 1.0f, Wrap::clamp, Wrap::clamp), 68.0f);
+}
+
+TEST(ImageLookup, MirroredRepeatMirrorsEveryOtherTile) {
+  const Image image = powers_of_two();
+  // Columns beyond the right edge run back: 3 2 1 0 | 0 1 2 3 | 3 2 1 0.
+  // x = 6.25 (5.75 from the centres' origin): columns 2 and 1, 0.25 * 4 + 0.75 * 2.
+  expect_footprint(bilinear_footprint(6.25f, 0.5f, 4, 2, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 2, 1, 0, 1,
+                   0.75f, 0.0f);
+  EXPECT_EQ(lookup(image, 6.25f, 0.5f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 2.5f);
+  // At either edge the edge texel meets its own mirror image.
+  EXPECT_EQ(lookup(image, 0.25f, 0.5f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 1.0f);
+  EXPECT_EQ(lookup(image, 4.25f, 0.5f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 8.0f);
+  // x = -1.5 is column 1's mirror image: 2.
+  EXPECT_EQ(lookup(image, -1.5f, 0.5f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 2.0f);
+  // Rows: 1 0 | 0 1 | 1 0; y = 2.75 is between row 1 and row 0 of the mirrored tile,
+  // 0.75 * 32 + 0.25 * 2.
+  expect_footprint(bilinear_footprint(1.5f, 2.75f, 4, 2, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 1, 2, 1, 0,
+                   0.0f, 0.25f);
+  EXPECT_EQ(lookup(image, 1.5f, 2.75f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), 24.5f);
+  // The whole is symmetric about the image's edges, and repeats every two tiles (the
+  // weights are multiples of 1/8, so every blend is exact).
+  for (const float x : {0.125f, 0.75f, 1.5f, 2.25f, 3.875f, 5.5f, 7.75f})
+    for (const float y : {0.25f, 1.0f, 1.75f}) {
+      const float value = lookup(image, x, y, Wrap::mirrored_repeat, Wrap::mirrored_repeat);
+      EXPECT_EQ(lookup(image, -x, y, Wrap::mirrored_repeat, Wrap::mirrored_repeat), value) << x << ", " << y;
+      EXPECT_EQ(lookup(image, x, 4.0f - y, Wrap::mirrored_repeat, Wrap::mirrored_repeat), value) << x << ", " << y;
+      EXPECT_EQ(lookup(image, x + 8.0f, y - 4.0f, Wrap::mirrored_repeat, Wrap::mirrored_repeat), value)
+          << x << ", " << y;
+    }
+}
+
+// Every texel index against integer arithmetic, for image sizes 1 to 64 and points up to
+// 2^21 texels away (the float quotient behind repeating must not step early or late);
+// points absurdly far away still read texels of the image.
+TEST(ImageLookup, IndicesAreExactFarFromTheImageAndInsideItBeyond) {
+  const auto repeat = [](long t, long n) { return ((t % n) + n) % n; };
+  const auto mirror = [&](long t, long n) {
+    const long r = repeat(t, 2 * n);
+    return r < n ? r : 2 * n - 1 - r;
+  };
+  for (int n = 1; n <= 64; ++n) {
+    std::vector<long> points;
+    for (long t = -9L * n; t <= 9L * n; ++t) points.push_back(t);
+    for (long t = (1L << 21) - 3L * n; t <= (1L << 21) + 3L * n; ++t) points.push_back(t), points.push_back(-t);
+    for (const long t : points) {
+      // A quarter of a texel past texel t's centre: texels t and t + 1.
+      const float x = float(t) + 0.75f;
+      const BilinearFootprint repeated = bilinear_footprint(x, 0.5f, n, 1, Wrap::repeat, Wrap::clamp);
+      ASSERT_EQ(repeated.x0, repeat(t, n)) << "n " << n << ", t " << t;
+      ASSERT_EQ(repeated.x1, repeat(t + 1, n)) << "n " << n << ", t " << t;
+      const BilinearFootprint mirrored = bilinear_footprint(x, 0.5f, n, 1, Wrap::mirrored_repeat, Wrap::clamp);
+      ASSERT_EQ(mirrored.x0, mirror(t, n)) << "n " << n << ", t " << t;
+      ASSERT_EQ(mirrored.x1, mirror(t + 1, n)) << "n " << n << ", t " << t;
+      ASSERT_EQ(repeated.fx, 0.25f);
+    }
+  }
+  for (const float far : {3e7f, -3e7f, 1e30f, -1e30f})
+    for (const Wrap wrap : {Wrap::repeat, Wrap::clamp, Wrap::mirrored_repeat}) {
+      const BilinearFootprint at = bilinear_footprint(far, far, 5, 3, wrap, wrap);
+      for (const int x : {at.x0, at.x1}) EXPECT_TRUE(x >= 0 && x < 5) << far << ": column " << x;
+      for (const int y : {at.y0, at.y1}) EXPECT_TRUE(y >= 0 && y < 3) << far << ": row " << y;
+    }
+}
+
+// Each axis wraps by its own mode: here repeating across the left edge and clamped above
+// the top, so 0.25 * 8 + 0.75 * 1 from row 0 alone.
+TEST(ImageLookup, EachAxisHasItsOwnMode) {
+  const Image image = powers_of_two();
+  expect_footprint(bilinear_footprint(0.25f, 0.25f, 4, 2, Wrap::repeat, Wrap::clamp), 3, 0, 0, 0, 0.75f, 0.75f);
+  EXPECT_EQ(lookup(image, 0.25f, 0.25f, Wrap::repeat, Wrap::clamp), 2.75f);
+  expect_footprint(bilinear_footprint(0.25f, 0.25f, 4, 2, Wrap::clamp, Wrap::repeat), 0, 0, 1, 0, 0.75f, 0.75f);
+  EXPECT_EQ(lookup(image, 0.25f, 0.25f, Wrap::clamp, Wrap::repeat), 0.25f * 16 + 0.75f * 1);
 }
 
 }  // namespace

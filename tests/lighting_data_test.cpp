@@ -50,9 +50,8 @@ Captured capture(const std::string& folder, int points) {
 DiffuseBandsAbove true_bands(const CaptureSet& captures) {
   const EnvironmentSpec truth = *capture_environment(captures);
   const Environment environment = make_environment(truth.source, truth.options, truth.width, truth.height);
-  const nlohmann::json& material = captures.material;
-  const RGBd Rd(material["Rd"][0].get<double>(), material["Rd"][1].get<double>(), material["Rd"][2].get<double>());
-  return {environment.sh(16), kDiffuseNormalisation * (1.0 - material["R0"].get<double>()) * Rd};
+  const PolishedMaterial& material = captures.material->material;
+  return {environment.sh(16), kDiffuseNormalisation * (1.0 - double(material.R0())) * material.Rd().cast<double>()};
 }
 
 // RMS difference between two sets of observations, relative to the second's RMS.

@@ -8,6 +8,7 @@
 // from the file's numbers (transforms, barycentrics, the sRGB formula, ...), never taken
 // from the implementation's own output.
 #include "renderer/camera.h"
+#include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/image.h"
 #include "renderer/ray_tracer.h"
@@ -25,6 +26,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace glaze {
@@ -1164,6 +1166,24 @@ TEST(CaptureSet, RenderCapturesWritesTransformsAndViews) {
   EXPECT_TRUE(std::filesystem::exists(out / "environment.exr"));
   EXPECT_NEAR(transforms["environment"].value("scale", -1.0), 1.0, 1e-9);
   EXPECT_NEAR(transforms["environment"].value("rotation", -1.0), 0.0, 1e-9);
+
+  // The typed reader gives back the same set: what invert-fit reads.
+  const CaptureSet set = read_transforms(out.string());
+  ASSERT_TRUE(std::holds_alternative<CaptureSphere>(set.object));
+  EXPECT_TRUE(std::get<CaptureSphere>(set.object).center.isApprox(Vec3(0.1f, 0.2f, 0.3f), 1e-6f));
+  EXPECT_NEAR(std::get<CaptureSphere>(set.object).radius, 0.5f, 1e-6f);
+  ASSERT_TRUE(set.material.has_value());
+  EXPECT_EQ(set.material->material.R0(), 0.05f);
+  EXPECT_TRUE((set.material->material.Rd() == RGB(0.6f, 0.5f, 0.4f)).all());
+  EXPECT_EQ(set.material->texture, "");
+  ASSERT_TRUE(set.environment.has_value());
+  EXPECT_EQ(set.environment->file, (out / "environment.exr").string());
+  EXPECT_EQ(set.environment->procedural, "constant");
+  EXPECT_EQ(set.environment->options.scale, 1.0f);
+  EXPECT_TRUE(set.environment->options.to_world == Mat3::Identity());
+  ASSERT_TRUE(set.renderer.has_value());
+  EXPECT_EQ(set.renderer->integrator, CaptureRenderer::Integrator::path);
+  EXPECT_EQ(set.renderer->spp, 2);
 
   // The held-out set: cam_b alone; its environment entry still leads to the map.
   const json holdout = read_json(out / "holdout" / "transforms.json");
