@@ -1,5 +1,5 @@
 // invert_material.cpp: `invert-fit --mode material` (homogeneous R0 and RGB Rd: Ceres
-// over R0, closed-form Rd, DESIGN §5) and `--mode texture` (R0 and a diffuse texture
+// over R0, closed-form Rd, docs/design.md §5) and `--mode texture` (R0 and a diffuse texture
 // Rd(u, v), unknown texels alpha 0) under known lighting: fit.json, the solver's report,
 // per-view residuals, re-renders of every view and held-out view, texture.exr.
 #include "app/invert_fit.h"

@@ -3,7 +3,7 @@
 //
 // It starts as the scene camera exactly (roll included). The pivot is the point on the
 // view axis nearest to the scene's centre, so orbiting turns the object in place. Orbit
-// turns the pose about the world's up axis (+Y, DESIGN §3) and about the horizontal axis
+// turns the pose about the world's up axis (+Y, docs/design.md §3) and about the horizontal axis
 // across the view through the pivot; pitch stops 1 degree short of the poles so that "up" stays
 // defined.
 // Pan moves camera and pivot in the image plane, by image pixels at the pivot's depth

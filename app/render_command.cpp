@@ -1,5 +1,5 @@
 // render_command.cpp: `glaze render`: images of a glTF scene's cameras, or a capture
-// set (DESIGN §4) for the inverse module.
+// set (docs/design.md §4) for the inverse module.
 #include "app/commands.h"
 #include "app/shared_options.h"
 #include "app/timing.h"

@@ -1,5 +1,5 @@
 // cross_view.h: the coat's Fresnel factor measured by comparing views (the joint fit's
-// first step, DESIGN §5).
+// first step, docs/design.md §5).
 //
 // Each view sees the environment mirrored in the coat: sample k of a view observes
 //   o_k = F(n.v) L(r_k) + c_k . d,     d = 21/(20 pi) (1 - R0) Rd L_lm  (the diffuse field)

@@ -1,4 +1,4 @@
-// diffuse_solve.h: the inner step of the nested material fits (DESIGN §5).
+// diffuse_solve.h: the inner step of the nested material fits (docs/design.md §5).
 //
 // For a fixed R0 the shading model is linear in Rd, per channel:
 //   observed_k = specular_k + Rd * diffuse_basis_k,

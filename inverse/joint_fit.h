@@ -1,4 +1,4 @@
-// joint_fit.h: material and lighting together (DESIGN §5, paper section 7).
+// joint_fit.h: material and lighting together (docs/design.md §5, paper section 7).
 //
 // Why the scale is determined: the mirror term is F(n.v) L(r) with F = R0 + (1 - R0)
 // (1 - n.v)^5 fixed in shape by R0 alone, and every direction is reflected towards

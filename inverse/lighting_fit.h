@@ -1,4 +1,4 @@
-// lighting_fit.h: lighting from an object of known material (DESIGN §5, paper section 6).
+// lighting_fit.h: lighting from an object of known material (docs/design.md §5, paper section 6).
 //
 // 1. The SH part: with the material known, every observation is linear in the lighting's
 //    SH coefficients L_lm, through both terms of the shading model:
@@ -122,7 +122,7 @@ struct LightingFit {
   ShCoefficients coefficients;
   double condition = 0.0;  // of the least-squares system before the ridge (worst channel)
   double rms = 0.0;        // of the solved model's residuals (the solve map and L_lm) over samples and channels
-  Image map;               // lat-long, world frame (DESIGN §3)
+  Image map;               // lat-long, world frame (docs/design.md §3)
   // Per texel: 1 if samples reached it or lie within 3 degrees of its centre with mirror
   // weight (sum F^2 >= 1e-4), 0 where it holds the SH reconstruction (lighting_fit.cpp).
   std::vector<float> covered;

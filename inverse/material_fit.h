@@ -1,4 +1,4 @@
-// material_fit.h: the nested material fits under known lighting (DESIGN §5, paper
+// material_fit.h: the nested material fits under known lighting (docs/design.md §5, paper
 // section 5): an outer Ceres bounded nonlinear least squares over R0 in [0, 1]; for each
 // R0 the closed-form bounded linear least squares for Rd per channel (diffuse_solve.h),
 // either one Rd for the whole object (homogeneous) or one per texel group (texture).

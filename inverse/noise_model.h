@@ -1,5 +1,5 @@
 // noise_model.h: how much of each observation is the captures' noise, estimated from the
-// captures themselves (DESIGN §5). Both uses of the observations that weigh them by
+// captures themselves (docs/design.md §5). Both uses of the observations that weigh them by
 // their reliability read it: the views' comparison (cross_view.h) and the lighting map's
 // splat (lighting_fit.h).
 #pragma once

@@ -1,4 +1,4 @@
-// samples.h: the observations a fit uses (DESIGN §5), taken from a capture set through
+// samples.h: the observations a fit uses (docs/design.md §5), taken from a capture set through
 // the renderer's own ray tracer.
 //
 // Pixel samples: every pixel whose footprint lies on the object (the rays through its

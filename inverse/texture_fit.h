@@ -1,4 +1,4 @@
-// texture_fit.h: the diffuse texture fit under known lighting (DESIGN §5, paper section
+// texture_fit.h: the diffuse texture fit under known lighting (docs/design.md §5, paper section
 // 5): Rd(u, v) per texel on a width x height grid over the texture coordinates (lat-long
 // of the normal for a sphere, the mesh's UVs otherwise), and R0 shared, by the same
 // nested fit as the homogeneous material with one Rd group per texel.

@@ -1,4 +1,4 @@
-// camera.h: the pinhole camera shared by glTF scenes and capture sets (DESIGN §3).
+// camera.h: the pinhole camera shared by glTF scenes and capture sets (docs/design.md §3).
 //
 // Intrinsics are in pixels (fl_x, fl_y, cx, cy, as nerfstudio's transforms.json); the
 // pose is camera-to-world with OpenGL axes (+X right, +Y up, looking along -Z). Pixel

@@ -1,4 +1,4 @@
-// gltf_loader.cpp: glTF 2.0 (.gltf, .glb) -> Scene, with tinygltf (DESIGN §4).
+// gltf_loader.cpp: glTF 2.0 (.gltf, .glb) -> Scene, with tinygltf (docs/design.md §4).
 //
 // Every index the file contains is checked before it is followed, so that a malformed
 // file gives a glaze::Error naming the element at fault instead of undefined behaviour.

@@ -1,4 +1,4 @@
-// latlong.h: the lat-long parameterisation of directions (DESIGN §3), in a map's own
+// latlong.h: the lat-long parameterisation of directions (docs/design.md §3), in a map's own
 // frame: u = atan2(d.x, -d.z) / (2 pi) mod 1, v = acos(d.y) / pi, row 0 at +Y.
 #pragma once
 

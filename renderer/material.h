@@ -1,4 +1,4 @@
-// material.h: the polished material (DESIGN §1), the one formula shared by the path
+// material.h: the polished material (docs/design.md §1), the one formula shared by the path
 // tracer, the SH integrator and every inverse fit.
 //
 // A diffuse base under a perfectly smooth dielectric coat, after Shirley, Hu, Smits and

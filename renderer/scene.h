@@ -1,4 +1,4 @@
-// scene.h: what a glTF scene becomes (DESIGN §4): world-space triangle meshes and
+// scene.h: what a glTF scene becomes (docs/design.md §4): world-space triangle meshes and
 // analytic spheres, polished materials (with optional diffuse textures), cameras, the
 // environment and the film size. Loaded by load_scene() (gltf_loader.cpp); turned into
 // Embree geometry by RayTracer.
@@ -32,7 +32,7 @@ struct TriangleMesh {
   int material = 0;
 };
 
-// An analytic sphere. Its texture coordinates are the lat-long (u, v) of DESIGN §3 of
+// An analytic sphere. Its texture coordinates are the lat-long (u, v) of docs/design.md §3 of
 // the surface normal turned into the sphere's own frame (the node's rotation).
 struct Sphere {
   std::string name;
@@ -75,7 +75,7 @@ struct Scene {
   PolishedMaterial material_at(int material, const Vec2& uv) const;
 
   // One analytic sphere and nothing else: nothing can shadow or reflect the object onto
-  // itself, so one bounce and no occlusion rays are exact (DESIGN §6).
+  // itself, so one bounce and no occlusion rays are exact (docs/design.md §6).
   bool is_single_convex_object() const { return meshes.empty() && spheres.size() == 1; }
 };
 

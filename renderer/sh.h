@@ -1,4 +1,4 @@
-// sh.h: real spherical harmonics and the SH half of the shading model (DESIGN §2).
+// sh.h: real spherical harmonics and the SH half of the shading model (docs/design.md §2).
 //
 // Convention: real SH *without* the Condon-Shortley phase (Ramamoorthi-Hanrahan,
 // three.js), polar axis +Z of world space, flat index l(l+1)+m, so that
@@ -128,7 +128,7 @@ struct ShCoefficients {
 // found by least squares over well-spread directions (exact to rounding, any lmax).
 ShCoefficients sh_rotate(const ShCoefficients& coefficients, const Mat3d& rotation);
 
-// Projects a lat-long RGB map (DESIGN §3 mapping, in the map's own frame) whose frame is
+// Projects a lat-long RGB map (docs/design.md §3 mapping, in the map's own frame) whose frame is
 // turned into world space by `local_to_world`: L_lm = sum over texels of L * the exact
 // integral of Y_lm over the texel's solid angle, accumulated in double. Integrating the
 // basis over each texel (rather than sampling it at the centre) makes the projection
@@ -136,7 +136,7 @@ ShCoefficients sh_rotate(const ShCoefficients& coefficients, const Mat3d& rotati
 // other coefficient zero to rounding, at any resolution, down to 1x1.
 ShCoefficients sh_project_latlong(const Image& map, const Mat3& local_to_world, int lmax);
 
-// The SH half of DESIGN §2: E(n) = sum_l Lambda_l h_l sum_m L_lm Y_lm(n). The diffuse
+// The SH half of docs/design.md §2: E(n) = sum_l Lambda_l h_l sum_m L_lm Y_lm(n). The diffuse
 // radiance is then 21/(20 pi) Rd (1 - R0) g(n.v) E(n) (see shading.h). For a constant
 // environment of radiance c, E = 20 pi / 21 * c.
 class ShDiffuseSum {

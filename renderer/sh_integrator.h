@@ -1,4 +1,4 @@
-// sh_integrator.h: the analytic integrator of DESIGN §2, the paper's dual
+// sh_integrator.h: the analytic integrator of docs/design.md §2, the paper's dual
 // angular/frequency-space shading model:
 //
 //   Lo(n, v) = F(n.v) L(r)  +  21/(20 pi) Rd (1 - R0) g(n.v) sum_l Lambda_l h_l L_lm Y_lm(n)

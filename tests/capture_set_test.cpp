@@ -1,4 +1,4 @@
-// Tests of reading capture sets (DESIGN §4): round trips through write_transforms,
+// Tests of reading capture sets (docs/design.md §4): round trips through write_transforms,
 // shared and per-frame intrinsics, paths resolved against the directory of
 // transforms.json, and one test per malformed input, each checking that the message
 // names the file and the key or problem at fault.

@@ -17,7 +17,7 @@ struct Samples {
   std::vector<RGB> observed, specular, basis;
 };
 
-// Points on a sphere seen from +Z, shaded in the office by the SH model (DESIGN §2).
+// Points on a sphere seen from +Z, shaded in the office by the SH model (docs/design.md §2).
 Samples shade_sphere(const PolishedMaterial& material, float noise, uint64_t seed) {
   const Environment office(make_procedural_environment("office", 128, 64), {});
   const ShDiffuseSum diffuse_sum(office.sh(4));

@@ -140,7 +140,7 @@ TEST(ImageIo, RealMapsLoadWithTheirDocumentedRange) {
   float maximum = 0;
   for (int j = 0; j < map.height; ++j)
     for (int i = 0; i < map.width; ++i) maximum = std::max(maximum, luminance(map.at(i, j)));
-  EXPECT_GT(maximum, 1000.0f);  // DESIGN data README: max luminance about 3350
+  EXPECT_GT(maximum, 1000.0f);  // the map's published maximum luminance is about 3350
 }
 
 // ---------------------------------------------------------------------------------------

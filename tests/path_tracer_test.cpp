@@ -161,7 +161,7 @@ TEST(PathTracer, EstimatorsAgreeUnderARealMap) {
   expect_estimators_agree(Environment::load(path.string()), "st_fagans");
 }
 
-// DESIGN §2 without SH truncation: F(n.v) L(r) + sum over texels of f_d L cos dOmega,
+// docs/design.md §2 without SH truncation: F(n.v) L(r) + sum over texels of f_d L cos dOmega,
 // with the texel radiance at its centre (the bilinear map agrees to O(texel^2)).
 RGB direct_shading(const PolishedMaterial& material, const Environment& env, const Vec3& n, const Vec3& v) {
   const Image& map = env.map();
@@ -223,7 +223,7 @@ TEST(PathTracer, SphereMatchesDirectIntegralOfTheShadingModel) {
 }
 
 TEST(ShIntegrator, MatchesTheDirectIntegralUpToSHTruncation) {
-  // With one sample per pixel (ss 1) the sh integrator evaluates DESIGN §2 at the pixel
+  // With one sample per pixel (ss 1) the sh integrator evaluates docs/design.md §2 at the pixel
   // centre; the direct texel sum evaluates it without SH truncation. They differ only by
   // the truncated diffuse term: small at lmax 16, larger at lmax 2.
   const Environment env(make_procedural_environment("office", 256, 128), {.rotation_degrees = 20});

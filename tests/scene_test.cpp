@@ -1,4 +1,4 @@
-// Tests of scenes (DESIGN §4): glTF loading (node hierarchy, normals, materials,
+// Tests of scenes (docs/design.md §4): glTF loading (node hierarchy, normals, materials,
 // textures, cameras, environment extras), the Embree ray caster, malformed scenes
 // through the library and the `glaze` command, and capture sets written by
 // `glaze render --captures`.

@@ -1,4 +1,4 @@
-// Acceptance of the sh integrator (DESIGN §2) against converged path-traced references
+// Acceptance of the sh integrator (docs/design.md §2) against converged path-traced references
 // of the red sphere scene, in the procedural office and blue room and under real maps.
 //
 // Both images are point-sampled at pixel centres (RenderOptions::pixel_centres, ss 1),
