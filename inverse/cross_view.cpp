@@ -110,10 +110,9 @@ namespace {
 // The 5 x 5 stencils' test of fit (quadratic_weights): the misfit's chi-square may exceed
 // its degrees of freedom by this many of its standard deviations (10: about four times
 // the noise's misfit through 25 pixels). It is there to catch detail far above the noise:
-// a small lamp's reflection fails it at any width from 3 to 30 (the white sphere under
-// studio_small_03, R0 within 0.0002 of the same), and at 3 the blue room's lamps fail it
-// too at 160 x 160, where the wider stencil's averaging is what holds R0 (R0 +0.0049 and
-// +0.0025 on seeds 0 and 1, against +0.0037 and +0.0018 at 10).
+// a small lamp's reflection fails it at any width from 3 to 30, while at 3 the blue room's
+// lamps fail it too at low resolutions, where the wider stencil's averaging is what holds
+// R0 (docs/notes/studio-lamps.md, "The test's width").
 constexpr double kGoodness = 10.0;
 
 }  // namespace
@@ -379,19 +378,14 @@ constexpr double kMinimumScale = 1e-3 / kNoiseFloor;
 // residuals are no noise but the interpolation's error, heavy-tailed under small bright
 // sources: a pair near a lamp misfits by many scales (the quadratic through the other
 // view's pixels cannot follow the lamp's edge), and Cauchy's influence, which falls off
-// only as 1 / e, lets such pairs pull d together. Measured on the red sphere under
-// studio_small_03 (three 256 x 256 views at ss 1, band-limited, R0 exact): d_00 0.43%
-// low, and with it the views' mirror estimates 3% too bright and Rd -0.024; trimmed:
-// d_00 0.016% low, Rd +0.0019. The white sphere there: R0 +0.0003 -> -0.0002; a bright
-// white one (Rd 0.9) +0.0014 -> -0.0005. On band-limited captures under the rooms and the
-// smooth real maps (St Fagans, Lebombo) it changes R0 and Rd by at most 0.0002. Trimmed
-// less (three solves after a single Cauchy reweighting) the bright white sphere stays at
-// R0 +0.0010; narrower (0.3) keeps too few pairs (+0.0016). Captures with noise keep the
-// Cauchy fit: there the residuals are the noise, for which Cauchy's loss is 95% efficient.
-// So do noise-free captures with a full-band diffuse term: until the later passes predict
-// its bands above lmax, those bands are a model error that all pairs share, not a tail,
-// and trimming keeps the pairs that happen to fit it (measured: the bright white sphere
-// under studio_small_03, sh at lmax 16, R0 -0.0029 -> +0.085).
+// only as 1 / e, lets such pairs pull d together, and with it the views' mirror estimates.
+// Trimming less (fewer solves) or narrower (kTrim 0.3, too few pairs kept) holds less of
+// that back; on smooth lighting it changes little (docs/notes/small-sources.md, "Small bright
+// sources and the trimmed diffuse field"). Captures with noise keep the Cauchy fit: there
+// the residuals are the noise, for which Cauchy's loss is 95% efficient. So do noise-free
+// captures with a full-band diffuse term: until the later passes predict its bands above
+// lmax, those bands are a model error that all pairs share, not a tail, and trimming keeps
+// the pairs that happen to fit it, which can run R0 away (same note).
 constexpr int kTrimmings = 4;
 constexpr double kTrim = 0.6;
 

@@ -23,9 +23,8 @@
 // 5 x 5, below) are the least-squares quadratic's through their records, evaluated at
 // sample a's own footprint: second-order exact, where linear interpolation on a triangle
 // leaves sum_j w_j u_j^T H u_j / 2 + tr(H (sum_j w_j S_j - S_a)) / 2, an error that
-// changes with n.v as F does and so biases R0 under small bright sources (measured on
-// 256 spp path-traced captures in the office: R0 +0.0012 to +0.0017 with linear
-// weights, +0.0003 to +0.0007 with these).
+// changes with n.v as F does and so biases R0 under small bright sources
+// (docs/notes/cross-view-comparison.md, "Linear against quadratic interpolation").
 //
 // The comparison multiplies the other view's noise by F_a / F_j: up to about 9 where
 // sample a is grazing (F ~ 0.35) and the other view sees r head-on (F = R0). Those are
@@ -39,16 +38,10 @@
 // 3 x 3: their noise is sample a's own. So do those where the quadratic does not fit the
 // 25 pixels to within their noise (cross_view.cpp, kGoodness): across a small lamp's
 // reflection the wider quadratic smooths it by an amount that changes with n.v as F
-// does, and biases R0 (the white sphere under studio_small_03, path-traced: R0 +0.017
-// through 5 x 5 there, +0.0033 without; with the noise model's median, below). Measured
-// on the white sphere in the blue room, path-traced at 256 spp (the case where R0's
-// noise costs most: Rd's error is about 13 times R0's), six seeds: R0 within -0.0019 to
-// +0.0009 (mean +0.0001) against -0.0016 to +0.0023 (mean +0.0011) through 3 x 3
-// everywhere. Through 5 x 5 everywhere the mean
-// is +0.0004 and the spread as wide (-0.0011 to +0.0015); through 7 x 7 where the other
-// view is nearer its normal, -0.0021 to +0.0003. The price is a wider patch for the
-// quadratic: at 160 x 160 the white spheres under the real maps go from R0 -0.0002 and
-// -0.0001 to -0.0019 and -0.0009 (St Fagans, Lebombo), their detail smoothed.
+// does, and biases R0 (docs/notes/studio-lamps.md). The price of 5 x 5 is a wider patch
+// for the quadratic, which smooths a map's detail at low resolutions; 3 x 3 everywhere,
+// 5 x 5 everywhere and 7 x 7 were measured against it (docs/notes/cross-view-comparison.md,
+// "5 x 5 stencils where the other view sees the direction nearer its normal").
 //
 // Where the lighting has detail finer than the sample spacing (a window's edge, a small
 // lamp) no interpolation is right and the equation does not hold; such pairs are
@@ -159,12 +152,11 @@ class CrossViewSystem {
   void pair_terms(const Pair& p, const std::vector<double>& inverse_F, Eigen::Ref<Eigen::VectorXd> x,
                   Eigen::Ref<Eigen::Vector3d> y, Eigen::Ref<Eigen::Vector3d> weight) const;
   // pair_terms of every pair in use (each stride_-th) at one R0. A fit reads them four
-  // times (three reweighted solves and the residuals), so they are formed once: summing
-  // over the stencils was about half of a joint fit's time, which this takes to 0.69-0.81
-  // of what it was (BM_JointFit*3x512), for the terms of one R0 held meanwhile. x is
-  // held in float: its rounding, 6e-8 of |x|, is far below the residuals it explains
-  // (at least 1e-5 of a pixel's level on noise-free captures); y, a difference of
-  // nearly equal observations, in double.
+  // times (three reweighted solves and the residuals), so they are formed once, for the
+  // terms of one R0 held meanwhile: summing over the stencils is much of a joint fit's time
+  // (docs/notes/fit-timings.md). x is held in float: its rounding, 6e-8 of |x|, is far
+  // below the residuals it explains (at least 1e-5 of a pixel's level on noise-free
+  // captures); y, a difference of nearly equal observations, in double.
   struct PairTerms {
     Eigen::MatrixXf x;                          // n_ x pairs in use
     Eigen::Matrix<double, Eigen::Dynamic, 3> y, weight;  // pairs in use x channels

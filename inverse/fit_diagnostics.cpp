@@ -70,8 +70,8 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
                        "% of the observed light: the object is matte-like, so only the low frequencies (the SH part) "
                        "are reliable; the high-resolution map is noisy");
   // The joint fit reads R0, and with it the lighting's absolute scale, from that share:
-  // measured on the white sphere in the blue room (9%), capture noise alone moves R0 by
-  // about 0.015 between noise realisations, and Rd and the scale with it.
+  // the smaller it is, the further capture noise moves R0, and Rd and the scale with it
+  // (docs/notes/blue-room-white-sphere.md).
   if (joint && fit.mirror_share < 0.1)
     warnings.push_back("--mode joint reads R0 and the lighting's absolute scale from the mirror reflection, which here "
                        "carries only " + std::to_string(std::lround(100 * fit.mirror_share)) +

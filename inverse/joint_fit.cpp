@@ -78,27 +78,21 @@ double minimise_on(Function&& f, const std::vector<double>& grid, double toleran
 // The searches for R0 stop at 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
 constexpr double kR0Tolerance = 1e-4;
 // Full-band captures: passes go on while one moves R0 by kJointPassTolerance or more, up
-// to JointFitOptions::max_passes. Two passes are usually consistent (the second moves R0
-// from the first by under 1e-3 in 12 of 16 measured cases: path-traced and noise-free
-// full-band captures of both spheres under the four lightings), but where the first pass
-// is far off its bands are too (noise-free full-band captures of the white sphere in the
-// blue room: R0 0.0606, 0.0404, 0.0386, 0.0384 against 0.0385 over four passes). Rd
-// settles more slowly (fit_joint_full_band says why): the later passes keep R0 and go on
-// while one moves Rd by kJointPassRdTolerance or more.
+// to JointFitOptions::max_passes. Two passes are usually consistent, but where the first
+// pass is far off its bands are too, and R0 takes more passes to settle
+// (docs/notes/joint-passes.md, "Passes until R0 settles"). Rd settles more slowly
+// (fit_joint_full_band says why): the later passes keep R0 and go on while one moves Rd by
+// kJointPassRdTolerance or more.
 
 // Band-limited captures: the grid on which step 2 integrates the views' mirror estimates
 // for L_00 (CrossViewSystem::lighting reads their interpolant at its texels' centres).
 // The grid must resolve the interpolant, not sample it again: a source smaller than a
 // texel (studio_small_03's lamps, empty_warehouse_01's, St Fagans' window panes) is
 // counted by whether a texel centre falls on its peak, an error that more pixels on the
-// object do not reduce. Measured on noise-free sh captures (ss 1, three 512 x 512 views)
-// of the red sphere (Rd 0.9765): on 256 x 128, L_00 off by -3.6% to -4.1% (by channel)
-// and Rd by +0.036 under St Fagans, -1.4% to -2.2% and +0.022 under the warehouse; on
-// 1024 x 512 (2048 x 1024 agrees to 0.1%) +0.2% and -0.0022, -0.2% and +0.0020. What
-// remains is the views' own sampling of those sources, which shrinks with their
-// resolution: at 256 x 256 it leaves L_00 off by +1.1% to +1.3% and +1.0% to +1.9%
-// (Rd -0.011 and -0.0095). The finer grid adds 0.7-1.0 s to a fit of three 512 x 512
-// views (BM_JointFit3x512).
+// object do not reduce. At 1024 x 512 that error is small beside what remains, the views'
+// own sampling of those sources, which shrinks with their resolution, and a finer grid
+// changes little (docs/notes/small-sources.md, "Step 2's L00: integrate the interpolant,
+// do not sample it again"); the grid's cost is in docs/notes/fit-timings.md.
 constexpr int kMirrorIntegralWidth = 1024, kMirrorIntegralHeight = 512;
 
 // The views' pairing, once the data are known to constrain the problem (fit_joint's throws).
@@ -121,16 +115,12 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
 // The map-consistent solve for the full-band captures' Rd, on the grid turned by
 // kGridTurns fractions of a texel in azimuth. Which texel holds which part of a sharp
 // source changes what the texels' values and gradients can represent, and with it the
-// misfit's least point: on noise-free full-band captures (sh at lmax 16, ss 4, 256 x 256)
-// the 128 x 64 grid turned by 1/8 and 3/8 of a texel moved the red sphere's Rd under St
-// Fagans from -0.0002 to +0.0235 and +0.0176. Rd minimises the misfit summed over the
-// turned grids instead (the edges' placement averaged out, as in cycle spinning). That
-// also makes the coarser 64 x 32 grid the better one (the default: more samples and
-// views per texel pin F better, and turning takes away its larger texels' placement
-// error): the eight noise-free full-band cases (both spheres under the four lightings)
-// are within 0.0034 of Rd, and within 0.0084 with the grid turned by a further 1/8 of a
-// texel (the unturned 128 x 64 grid alone: 0.0121 and 0.0235). The lighting is solved on
-// the unturned grid.
+// misfit's least point: on full-band captures, turning the grid by a fraction of a texel
+// moves Rd by more than its bounds. Rd minimises the misfit summed over the turned grids
+// instead (the edges' placement averaged out, as in cycle spinning). That also makes the
+// coarser 64 x 32 grid the better one (the default: more samples and views per texel pin
+// F better, and turning takes away its larger texels' placement error); see
+// docs/notes/turned-solve-grid.md. The lighting is solved on the unturned grid.
 constexpr int kGridTurns = 4;
 
 const std::string kTurnedSolve = "the map-consistent lighting solve at " + std::to_string(kGridTurns) + " turns of its grid";
@@ -342,8 +332,8 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     return fit_joint(data, samples, options, joint, observer);
   // The first pass only predicts the bands, for which round 1's R0 is close enough (a
   // round 2 typically moves it by under 1e-4; round 0 alone, plain least squares on a
-  // quarter of the pairs, is not: measured Rd +0.012 instead of +0.002 on the noise-free
-  // full-band test), and searched to a tenth of the usual precision (1e-3 relative);
+  // quarter of the pairs, is not: docs/notes/joint-passes.md, "Passes until R0 settles"),
+  // and searched to a tenth of the usual precision (1e-3 relative);
   // the later passes are the ones that converge.
   JointFitOptions first_options = joint;
   first_options.max_rounds = std::min(joint.max_rounds, 2);
@@ -364,8 +354,8 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     // R0 settles first; Rd then still moves, as the bands are predicted from the last
     // Rd (the mirror fixes the lighting's detail whatever Rd is, so the bands' diffuse
     // radiance goes with Rd) and each pass takes back about nine tenths of the error of
-    // the one before (measured on the red sphere in the blue room: Rd -0.069, -0.0033,
-    // then +0.0020 and +0.0026, at the fit's own error, over four passes). The first
+    // the one before, until Rd is at the fit's own error (docs/notes/joint-passes.md,
+    // "Passes until Rd settles too"). The first
     // pass has no step to judge by (and searched R0 coarsely), so the second always
     // searches again.
     if (last.passes > 1 && last.pass_step < kJointPassTolerance) {

@@ -33,11 +33,9 @@
 // lighting_fit.h says why that lighting is good enough), takes them off the
 // observations and fits again from the first R0; and again from each new fit's lighting
 // while a pass still moves R0 or Rd by 1e-3 or more (at most max_passes); once R0 has
-// settled, a pass keeps it and solves Rd and the lighting alone. (Measured on
-// noise-free captures whose diffuse term has the bands up to 16 (ss 4, 256 x 256),
-// white sphere in the blue room, fitted at lmax 4: R0 +0.022 and Rd +0.23 in one pass,
-// +0.0019 and +0.021 after the second, +0.0001 and +0.0032 after the third, -0.0001
-// and +0.0011 after the fourth.)
+// settled, a pass keeps it and solves Rd and the lighting alone. Each pass's better
+// lighting predicts the bands better, so R0 and Rd converge over a few passes
+// (docs/notes/joint-passes.md).
 #pragma once
 
 #include "inverse/fit_progress.h"
@@ -74,11 +72,10 @@ struct JointFit {
 struct JointFitOptions {
   int max_rounds = 20;
   // Full-band captures: the most passes (fit_joint_full_band) before the fit stops with
-  // R0 or Rd still moving (converged false). The white sphere in the blue room, whose
-  // first pass starts furthest off, settles after 6-7 passes path-traced at 256 spp and
-  // after 8 on noise-free captures fitted as photographs (the views compared through
-  // 5 x 5 pixels, cross_view.h): 12 leaves room; passes past the point of settling are
-  // never run.
+  // R0 or Rd still moving (converged false). 12 leaves room beyond the white sphere in the
+  // blue room, whose first pass starts furthest off and which takes the most passes to
+  // settle (docs/notes/joint-passes.md, "How many passes"); passes past the point of
+  // settling are never run.
   int max_passes = 12;
   // The captures' diffuse term is band-limited at the fit's lmax (see above).
   bool band_limited_diffuse = false;

@@ -429,9 +429,9 @@ constexpr double kMinMirrorWeight = 1e-4;
 // Lat-long texels shrink towards the poles (by sin theta) while the samples' density on
 // the sphere of directions does not, so there many texels fall between samples although
 // the directions all around them are seen: the SH reconstruction in those, as for
-// directions no view sees, speckled the poles with lmax-4 ringing of the bright lights
-// nearby (office, noise-free captures: the top rows 2-5 times too bright, the map's bands
-// 2-5 off by 5-9%, and through the diffuse bands it predicts, the joint fit's Rd). Such a
+// directions no view sees, would speckle the poles with lmax-4 ringing of the bright
+// lights nearby, which errs in the map's bands and, through the diffuse bands it predicts,
+// in the joint fit's Rd (docs/notes/lighting-map.md, "Texels between samples"). Such a
 // texel takes the samples within kBetweenSamples of its centre instead, in the smallest
 // disc (doubled from a texel's height) that holds enough; only directions with no sample
 // that near are unseen.
@@ -548,16 +548,14 @@ class SplatRows {
 // Why it matters: by F^2 alone, a grazing view (F up to 1, against R0 ~ 0.04 head-on)
 // decides every texel it reaches, although there its samples are the sparsest (the
 // mirror's directions spread fastest near the silhouette), so that a texel's share of a
-// source smaller than their spacing was decided by a few samples, hit or missed. Measured
-// on noise-free captures (512 x 512, three views, the map box-filtered to 64 x 32):
-// St Fagans 5.4% -> 2.4%, Grace Cathedral 7.6% -> 3.0% (inverse/README.md, "Maps whose
-// sources are smaller than the output map's texels").
+// source smaller than their spacing would be decided by a few samples, hit or missed
+// (docs/notes/lighting-map.md, "The reliability-weighted map").
 //
 // `noise` is the mean over the texel's samples of the captures' noise model, not each
 // sample's own: the model's floor follows the pixel's level (noise_model.h), which in a
 // channel that only the mirror lights is the lighting itself, so that a sample's own
-// would weigh a small source's samples down against the dark ones around it (measured:
-// the red sphere under St Fagans, noise-free, 7.8% instead of 2.4%, its blue channel 13%).
+// would weigh a small source's samples down against the dark ones around it
+// (docs/notes/lighting-map.md, "The reliability-weighted map").
 // tau^2 takes whatever the noise model leaves out: on point samples, which have no pixel
 // grid to estimate the noise on (noise_model.h), the captures' noise, so that their
 // weights tend to equal ones; and the diffuse model's error divided by F, which pulls the
@@ -767,9 +765,9 @@ LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples,
                                    const LightingFitOptions& options) {
   if (diffuse_lmax <= data.lmax) return fit_lighting(data, R0, Rd, options);
   // The first fit's map only predicts the bands: the SH-only least squares under it does
-  // as well there as the map-consistent solve, at a fraction of the cost (measured on
-  // path-traced captures of both spheres under four lightings: L_lm after the second fit
-  // the same to 0.02% of L00).
+  // as well there as the map-consistent solve, at a fraction of the cost: the second fit
+  // ends at the same L_lm either way (docs/notes/lighting-map.md, "The second fit for
+  // full-band captures").
   LightingFitOptions first_options = options;
   first_options.solve_width = 0;
   const LightingFit first = fit_lighting(data, R0, Rd, first_options);

@@ -147,10 +147,10 @@ struct LightingFit {
 // T_t + G_t . delta_k, delta_k its offset from the centre in texels. The gradient
 // matters to the joint fit: without it the lighting's variation within a texel, seen by
 // each view at other offsets and other n.v, reads as a change of Fresnel factor and
-// biases R0, Rd and the scale (measured on the white sphere in the office: Rd off by
-// 0.017-0.032 and the scale by 4%, against 0.005 and 0.6% with it; adding second-order
-// terms made it worse again: six unknowns per texel leave too little to pin F). Texels no ray reaches hold the SH reconstruction, and L_lm
-// is the map's own projection (of the T_t), so it is consistent by construction:
+// biases R0, Rd and the scale. Second-order terms do not help: six unknowns per texel
+// leave too little to pin F (docs/notes/lighting-map.md, "Why the SH least squares is
+// not enough"). Texels no ray reaches hold the SH reconstruction, and L_lm is the map's
+// own projection (of the T_t), so it is consistent by construction:
 //   L = sum_covered Omega_t Y(t) T_t + sum_uncovered Omega_t Y(t) Y(t)^T L
 //     => L = G P T,  G = (I - P_u Y_u^T)^-1,  P = [Omega_t Y(t)] over covered texels.
 // Sample k predicts o_k = F_k (T_t + G_t . delta_k) + d_k . L, d_k = 21/(20 pi) Rd (1 - R0)
@@ -227,9 +227,9 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
 // For captures whose diffuse term has every band (photographs, the path tracer): a first
 // fit, then a second on the observations less the bands lmax+1 .. diffuse_lmax that the
 // first one's map predicts (above); `data`, gathered from `samples`, receives the
-// second's observations. One correction, not an iteration: a third fit
-// moves L_lm by at most 0.03% of L00 (measured on path-traced and noise-free full-band
-// captures of both spheres in the rooms). diffuse_lmax <= data.lmax: fit_lighting alone.
+// second's observations. One correction, not an iteration: a third fit barely moves
+// L_lm (docs/notes/lighting-map.md, "The second fit for full-band captures").
+// diffuse_lmax <= data.lmax: fit_lighting alone.
 LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,
                                    const LightingFitOptions& options);
 

@@ -68,12 +68,11 @@ std::optional<double> walk(const double* v, size_t padded, double bound, size_t 
 // How: `guess` is first ranked by counting the values below it; the median is then a
 // few ranks from it, reached by as many passes for the nearest value beyond the
 // last one found, each a vectorised scan of v, and one more that counts that value's
-// ties. Selection (std::nth_element) mispredicts about half its branches on 72 values in
-// random order; with it on the 41% of windows whose median is over 3 ranks from the last
-// one's (and a scalar walk for the others), the noise model took 249 ms for three
-// 512 x 512 views, 104 ms with this walk (BM_NoiseModel3x512). Measured on those views,
-// 89% of the medians are within 8 ranks of the last one's and 99.9% within 20; those
-// further (the first window of a thread, wider windows) take the selection.
+// ties. Neighbouring windows share most of their values, so nearly all medians are within
+// a few ranks of the last one's, and a few branch-free scans beat selection
+// (std::nth_element), which mispredicts about half its branches on 72 values in random
+// order (docs/notes/fit-timings.md). Medians further away (the first window of a thread,
+// wider windows) take the selection.
 double median_near(const double* v, size_t n, double guess) {
   if (n == 0) throw Error("the median of no values");
   const size_t padded = (n + Lanes::size() - 1) / Lanes::size() * Lanes::size();
@@ -133,19 +132,16 @@ std::vector<PixelGrid> pixel_grids(const SampleSet& samples) {
 // the window, and the mean counts it as noise. The pairs there then carry a variance that
 // makes their misfit (the interpolation's, not the noise's) look like noise, and the
 // robust loss keeps them; with the median they stay outliers, and the 5 x 5 stencils'
-// test of fit (quadratic_weights) sees the detail. Measured on path-traced captures of
-// the white sphere under studio_small_03 (256 spp, 256 x 256, seeds 0-2), R0 +0.017,
-// +0.013, +0.021 with the mean; +0.0070, +0.0048, +0.0082 with the median; +0.0033,
-// +0.0022, +0.0038 with the test of fit as well (inverse/README.md, "Small lamps,
-// path-traced").
+// test of fit (quadratic_weights) sees the detail (docs/notes/studio-lamps.md, "The fix:
+// lamps are not noise").
 //
 // Why from the data: a path tracer's noise is its diffuse estimate's (the coat's mirror
 // is traced exactly), so it is not proportional to the pixel's level. Measured on 256 spp
 // captures of the white sphere in the blue room, it is 4% of the level near the normal and
 // 1.5% at n.v = 0.2-0.3, where the mirror carries much of the level; weighting by the
-// level instead (glaze's first model) misweighs the grazing pairs that fix R0, and
-// the joint fit ends at R0 0.009 instead of 0.0385, for every seed. Photographs' noise
-// (shot and read noise) is not proportional to the level either.
+// level instead misweighs the grazing pairs that fix R0, and biases it for every seed
+// (docs/notes/noise-model.md, "Why the noise is estimated from the data"). Photographs'
+// noise (shot and read noise) is not proportional to the level either.
 //
 // `noise_free` captures (glaze's sh integrator, which is deterministic) take the floor
 // everywhere. Their residuals e are the signal's detail, not noise: in a channel that

@@ -8,9 +8,9 @@
 // pixel index), so the image depends only on the seed, the camera and the number of
 // passes, never on the thread count or the scheduling. The camera enters so that the views of
 // one capture set carry independent noise, as photographs do: with streams keyed by the
-// pixel alone, the same pixel of two views drew the same numbers, and their noise was
-// correlated (measured: -0.16 to +0.22 between the three views of the white sphere in
-// the blue room at 256 spp), which the joint fit, comparing views, does not model.
+// pixel alone, the same pixel of two views would draw the same numbers, and their noise
+// would be correlated, which the joint fit, comparing views, does not model
+// (docs/notes/noise-model.md, "Views with independent noise").
 #pragma once
 
 #include "renderer/camera.h"

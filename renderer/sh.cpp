@@ -312,7 +312,8 @@ namespace {
 using FloatLanes = std::experimental::native_simd<float>;
 
 // sum(lmax) with the band limits people use as compile-time constants, so that the basis
-// recurrence unrolls (1.3x to 2x faster than the loop), else as an int.
+// recurrence unrolls (faster than the loop: docs/notes/renderer.md, "The `sh` integrator's
+// speed"), else as an int.
 template <typename Sum>
 decltype(auto) with_band_limit(int lmax, Sum&& sum) {
   switch (lmax) {

@@ -1,5 +1,5 @@
 // Benchmarks of the shared core (Google Benchmark). Run: build/tests/glaze_bench
-// Reported in issue notes: SH projection of a 1024x512 map at lmax 4, 10M environment
+// Reported in docs/performance.md: SH projection of a 1024x512 map at lmax 4, 10M environment
 // samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline.
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"

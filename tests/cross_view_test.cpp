@@ -3,8 +3,8 @@
 // and a lighting that is smooth on the scale of a few pixels, every pair's residual at the
 // true R0 is the interpolation's own error, which the quadratic interpolation makes third
 // order in the pixel spacing. Its RMS is dominated by the pairs near the silhouette,
-// whose pixels are far apart in direction: measured 1.16e-4 of the level, against
-// 2.37e-4 with the triangles' linear weights.
+// whose pixels are far apart in direction: measured 1.16e-4 of the level, about half of
+// what linear weights on triangles leave (docs/notes/cross-view-comparison.md).
 #include "inverse/capture_scene.h"
 #include "inverse/cross_view.h"
 #include "inverse/lighting_fit.h"
@@ -72,8 +72,8 @@ TEST(CrossView, QuadraticInterpolationHalvesThePairsErrorUnderSmoothLighting) {
 // Captures with noise compare through 5 x 5 pixels where the other view sees the direction
 // nearer its normal (cross_view.h): the same second-order interpolation over a wider
 // patch, so on the same views (paired as having noise) the pairs stay about as exact.
-// Measured: 1.30e-4 of the level (1.16e-4 through 3 x 3 above, 2.37e-4 with linear
-// weights). This also runs that path under the sanitizers.
+// Measured: 1.30e-4 of the level (1.16e-4 through 3 x 3 above). This also runs that
+// path under the sanitizers.
 TEST(CrossView, WiderStencilsOnCapturesWithNoiseStaySecondOrderExact) {
   EXPECT_LT(relative_rms_at_truth(false), 1.6e-4);
 }

@@ -337,7 +337,7 @@ void expect_joint_bounds_under_map(const char* name, const std::string& resoluti
 // sample spacing at 256x256, where step 2's L_00 counts them by where the pixels fall
 // (joint_fit.cpp, kMirrorIntegralWidth): the red sphere's Rd -0.011 there. Measured at
 // 512x512: R0 within 0.0001, Rd within 0.0022 (the red sphere's red channel), scale
-// within 0.3%. On the 256x128 grid step 2 used before, the red sphere was at Rd +0.036.
+// within 0.3% (why step 2's grid is finer than 256x128: docs/notes/small-sources.md).
 TEST(InvertFitJoint, NoiseFreeStFagansMeetsTheBoundsAt512) {
   expect_joint_bounds_under_map("st_fagans_interior_1k.hdr", "512x512");
 }
@@ -350,13 +350,13 @@ TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) {
 
 // studio_small_03, whose small lamps carry most of its light (256x256): the diffuse field
 // must be trimmed of the pairs near the lamps (cross_view.cpp, kTrim). Measured: R0
-// within 0.0002, Rd -0.0073 (red sphere) and -0.0050 (white), scale within 0.8%;
-// without the trimming the red sphere's Rd is -0.033 and its scale 1.030. Rd misses the
+// within 0.0002, Rd -0.0073 (red sphere) and -0.0050 (white), scale within 0.8% (what
+// the trimming does here: docs/notes/small-sources.md). Rd misses the
 // issue's noise-free 0.003 here (at 512x512 too: -0.0086), and meets its path-traced
 // 0.01. The remaining error is in the red sphere's red channel: L00 of its mirror
 // estimates is +0.9% at 512x512, against +0.1% in green and blue, where the diffuse
-// term is near zero (there the mirror is 7% of the light: inverse/README.md, "Small bright
-// sources").
+// term is near zero (there the mirror is 7% of the light: docs/notes/small-sources.md,
+// "Small bright sources and the trimmed diffuse field").
 TEST(InvertFitJoint, StudioLampsNeedTheTrimmedDiffuseField) {
   expect_joint_bounds_under_map("studio_small_03_1k.hdr", "256x256", 0.01);
 }
@@ -482,9 +482,8 @@ TEST(InvertFitJoint, PassesGoOnUntilRdSettles) {
 // 256 x 256) with the lighting turned about +Y by 0.35 and 2.46 degrees (1/16 and 7/16 of
 // a texel of the 64 x 32 solve map). Measured, red channel's Rd: +0.0007 and +0.0077
 // (0.0070 apart), and -0.0002, -0.0014, +0.0019 unturned and turned by 1.05 and 1.76
-// degrees; with Rd from the unturned 128 x 64 grid alone (glaze's fit before) -0.0088
-// and +0.0110 (0.0198 apart; -0.0002, -0.0087, +0.0030). Asserted: Rd within the
-// path-traced bound 0.01 in each, and within 0.01 of each other.
+// degrees; a single unturned grid moves far more (docs/notes/turned-solve-grid.md).
+// Asserted: Rd within the path-traced bound 0.01 in each, and within 0.01 of each other.
 TEST(InvertFitJoint, RdDoesNotDependOnWhereTheSolveMapsTexelEdgesFall) {
   GLAZE_REQUIRE_ENVMAP(map, "st_fagans_interior_1k.hdr");
   TemporaryDirectory dir;
@@ -521,19 +520,12 @@ void expect_path_traced_joint(const std::string& scene, const std::string& optio
 // data (cross_view.cpp), and where the other view's noise is amplified (it sees the
 // direction nearer its normal) they compare through its 5 x 5 pixels (cross_view.h). The
 // white sphere in the blue room at 256 spp is the case where R0's noise costs most: Rd
-// moves about 13 times R0. Weighting by the level (glaze's earlier model) ended it at R0
-// -0.030, Rd -0.43, scale 3.17 for every seed (0-3); through 3 x 3 pixels only, seeds
-// 0-5 gave R0 +0.0007, -0.0016, +0.0017, +0.0023, +0.0018, +0.0016 and worst Rd +0.013,
-// -0.019, +0.027, +0.032, +0.024, +0.021. Through 5 x 5 (before the camera's index
-// entered the path tracer's streams): R0 +0.0001, -0.0019, +0.0003, +0.0006, +0.0005,
-// +0.0009; worst Rd +0.0051, -0.022, +0.0088, +0.011, +0.0085, +0.013; worst scale 0.993,
-// 1.035, 0.987, 0.985, 0.987, 0.981. Measured now (the noise model's median, the 5 x 5
-// stencils' test of fit), seed 0: R0 -0.0002, Rd -0.0028, scale 1.004; twelve seeds in
-// inverse/README.md ("Small lamps, path-traced"). Asserted on seed 0: the path-traced
-// bounds (R0 0.003, Rd 0.01, scale 3%), which the 3 x 3 comparison misses in Rd (+0.013). Of
-// seeds 0-11, 6, 7 and 10 miss Rd, so a change to the path tracer's random stream can
-// fail this test by chance about a quarter of the time: it checks this seed's numbers,
-// and the twelve seeds in inverse/README.md are the statistics.
+// moves about 13 times R0 (docs/notes/blue-room-white-sphere.md). Measured, seed 0:
+// R0 -0.0002, Rd -0.0028, scale 1.004. Asserted on seed 0: the path-traced bounds (R0
+// 0.003, Rd 0.01, scale 3%). Of seeds 0-11, 6, 7 and 10 miss Rd, so a change to the path
+// tracer's random stream can fail this test by chance about a quarter of the time: it
+// checks this seed's numbers, and the twelve seeds in docs/notes/studio-lamps.md ("The
+// fix: lamps are not noise") are the statistics.
 TEST(InvertFitJoint, PathTracedPairsAreWeightedByTheirNoise) {
   expect_path_traced_joint("white_sphere_blue_room.gltf", "", 0.003, 0.01, 0.03);
 }
@@ -542,10 +534,9 @@ TEST(InvertFitJoint, PathTracedPairsAreWeightedByTheirNoise) {
 // stencil spans: the noise model reads the window's median residual, so a lamp's edge is
 // not counted as noise, and the 5 x 5 stencils must pass their test of fit
 // (cross_view.cpp, kGoodness). Measured on the white sphere (256 x 256, 256 spp, seed 0):
-// R0 +0.0033, worst Rd +0.023, scale 0.966; with the window's mean and 5 x 5 stencils
-// untested R0 was +0.017 (Rd +0.10, scale 0.87). Rd and the scale still miss the issue's
-// 0.01 and 3% here (inverse/README.md, "Small lamps, path-traced"); asserted: R0 within
-// 0.005, Rd within 0.04 and the scale within 5%, which the code before fails.
+// R0 +0.0033, worst Rd +0.023, scale 0.966. Rd and the scale still miss the issue's
+// 0.01 and 3% here (docs/notes/studio-lamps.md); asserted: R0 within 0.005, Rd within
+// 0.04 and the scale within 5%, which the window's mean with untested 5 x 5 stencils fails.
 TEST(InvertFitJoint, PathTracedStudioLampsAreNotNoise) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   expect_path_traced_joint("white_sphere_office.gltf", "--env " + studio.string(), 0.005, 0.04, 0.05);

@@ -3,8 +3,8 @@
 // by side. Each asserts the accuracy bounds of the inverse issues on its captures:
 // material under known lighting R0 within 0.002 and Rd within 0.005 (path-traced),
 // texture texels within 0.02 RMSE, lighting L_lm (l <= 2) within 3% of L00; the joint
-// fit to the looser bounds it meets today on path-traced captures (the README states
-// the gap). Also that
+// fit to the looser bounds it meets today on path-traced captures (docs/accuracy.md,
+// "The joint fit", states the gap). Also that
 // recovered materials transfer to other lightings, that a spectral camera shows the
 // pseudo-BRDF colour shift that RGB captures cannot, and that the report and its
 // figures are written. And pseudo_brdf.h's model against closed forms.
@@ -68,12 +68,10 @@ void expect_inverse_bounds(const nlohmann::json& results) {
   // office white +0.0001 to +0.0008, -0.0070 to -0.020; blue-room red -0.0002, within
   // 0.016; blue-room white +0.0009 to +0.0038, +0.012 to +0.046; seed 0 under St
   // Fagans red -0.0004, +0.0031, white -0.0025, -0.0053, under Lebombo red -0.0003,
-  // -0.011, white -0.0011, -0.014 (the code before the noise model's median and the 5 x 5
-  // stencils' test of fit, seed 0: blue-room white +0.0036, St Fagans white -0.0008,
-  // Lebombo white -0.0008). The blue-room white sphere is the one R0's noise moves most
-  // (cross_view.h): comparing the views through 3 x 3 pixels only, seeds 0 and 1 gave R0
-  // +0.0073 and +0.0056, Rd +0.097 and +0.069, which fail these bounds. Asserted with
-  // some margin over that spread.
+  // -0.011, white -0.0011, -0.014. The blue-room white sphere is the one R0's noise moves
+  // most (cross_view.h); comparing the views through 3 x 3 pixels only fails these bounds
+  // there (docs/notes/cross-view-comparison.md, docs/notes/studio-lamps.md). Asserted with
+  // some margin over the spread above.
   for (const auto& row : results["table3"]) {
     SCOPED_TRACE(row["lighting"].get<std::string>() + " " + row["object"].get<std::string>());
     EXPECT_NEAR(row["joint_R0_error"].get<double>(), 0.0, 0.004);
