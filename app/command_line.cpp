@@ -29,8 +29,7 @@ bool parse_real(const std::string& token, float* value) {
   char* end = nullptr;
   errno = 0;
   const double parsed = std::strtod(token.c_str(), &end);
-  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(parsed) ||
-      std::abs(parsed) > FLT_MAX)
+  if (end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(parsed) || std::abs(parsed) > FLT_MAX)
     return false;
   *value = static_cast<float>(parsed);
   return true;
@@ -159,9 +158,8 @@ std::string unexpected(const CLI::App& app) {
 void refuse_repeats(const CLI::App& app, const std::vector<std::string>& args, const std::string& see) {
   for (const std::string& name : option_names(app)) {
     const std::string flag = "--" + name;
-    const auto given = std::count_if(args.begin(), args.end(), [&](const std::string& arg) {
-      return arg == flag || arg.starts_with(flag + "=");
-    });
+    const auto given = std::count_if(
+        args.begin(), args.end(), [&](const std::string& arg) { return arg == flag || arg.starts_with(flag + "="); });
     if (given > 1) throw Error("option " + flag + " is given twice" + see);
   }
 }
@@ -175,9 +173,7 @@ std::istream& operator>>(std::istream& in, Resolution& resolution) {
   return in;
 }
 
-std::ostream& operator<<(std::ostream& out, const Resolution& resolution) {
-  return out << to_string(resolution);
-}
+std::ostream& operator<<(std::ostream& out, const Resolution& resolution) { return out << to_string(resolution); }
 
 std::string to_string(const Resolution& resolution) {
   return std::to_string(resolution.width) + "x" + std::to_string(resolution.height);
@@ -198,7 +194,7 @@ CLI::Validator integer_in(long long minimum, long long maximum) {
 
 CLI::Validator real_in(float minimum, float maximum) {
   const std::string low = number_text(minimum), high = number_text(maximum);
-  const std::string help = maximum == FLT_MAX ? (minimum == -FLT_MAX ? "" : ">= " + low)
+  const std::string help = maximum == FLT_MAX    ? (minimum == -FLT_MAX ? "" : ">= " + low)
                            : minimum == -FLT_MAX ? "<= " + high
                                                  : low + " to " + high;
   const std::string range = minimum > -FLT_MAX && maximum < FLT_MAX ? "in [" + low + ", " + high + "]" : help;
@@ -262,9 +258,9 @@ CLI::Option* add_reals(CLI::App& app, const std::string& name, std::vector<float
       ->check(CLI::Validator(
           [split, count](std::string& token) {
             std::vector<float> values;
-            return split(token, &values) ? std::string()
-                                         : "'" + token + "' is not " + std::to_string(count) +
-                                               " comma-separated finite numbers";
+            return split(token, &values)
+                       ? std::string()
+                       : "'" + token + "' is not " + std::to_string(count) + " comma-separated finite numbers";
           },
           ""));
 }

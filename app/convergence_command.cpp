@@ -53,7 +53,9 @@ constexpr int kShLmax[] = {2, 4, 6, 8, 12};
 // a pixel's samples disagree (ShIntegratorOptions::refined_supersampling).
 struct ShSampling {
   int ss, refined;
-  std::string label() const { return "ss " + std::to_string(ss) + (refined > 0 ? " refined " + std::to_string(refined) : ""); }
+  std::string label() const {
+    return "ss " + std::to_string(ss) + (refined > 0 ? " refined " + std::to_string(refined) : "");
+  }
 };
 constexpr ShSampling kShSampling[] = {{1, 0}, {2, 0}, {4, 0}, {1, 8}, {2, 8}};
 // Baselines of the sh error split: the truncation error of lmax is its difference from
@@ -62,10 +64,9 @@ constexpr ShSampling kShSampling[] = {{1, 0}, {2, 0}, {4, 0}, {1, 8}, {2, 8}};
 constexpr int kSplitLmax = 32, kSplitSupersampling = 8;
 constexpr double kTargets[] = {0.01, 0.003};
 
-
 struct Row {
   std::string integrator, setting;
-  int lmax = 0, sampling = 0;  // sh rows: lmax, index in kShSampling
+  int lmax = 0, sampling = 0;       // sh rows: lmax, index in kShSampling
   double projection_seconds = 0.0;  // sh rows: the part of `seconds` that projects the map
   double seconds = 0.0;
   ImageError error;
@@ -81,7 +82,8 @@ std::pair<double, bool> path_time_to(const std::vector<Row>& rows, double target
     if (row.integrator != "path") continue;
     if (row.beyond_noise <= target) {
       if (!previous || previous->beyond_noise <= row.beyond_noise) return {row.seconds, false};
-      const double slope = std::log(row.seconds / previous->seconds) / std::log(row.beyond_noise / previous->beyond_noise);
+      const double slope =
+          std::log(row.seconds / previous->seconds) / std::log(row.beyond_noise / previous->beyond_noise);
       return {previous->seconds * std::pow(target / previous->beyond_noise, slope), false};
     }
     previous = &row;
@@ -126,14 +128,16 @@ int convergence(const ConvergenceCommandOptions& args) {
   const long reference_spp = args.reference ? 0 : args.reference_spp;
   const long max_spp = args.max_spp.value_or(reference_spp > 0 ? std::max(1L, reference_spp / 16) : 1024);
   if (reference_spp > 0 && max_spp > reference_spp / 4)
-    throw Error("--max-spp " + std::to_string(max_spp) + " is too close to the reference's " + std::to_string(reference_spp) +
+    throw Error("--max-spp " + std::to_string(max_spp) + " is too close to the reference's " +
+                std::to_string(reference_spp) +
                 " spp: errors against it would mostly measure the reference's own noise; use at most --ref-spp / 4 (" +
                 std::to_string(reference_spp / 4) + ") or raise --ref-spp");
   if (args.reference) {
     reference = read_image(*args.reference);
     // Its own relative RMSE, as an earlier run measured it (0: taken as exact).
     reference_noise = args.reference_noise;
-    if (!(reference_noise >= 0.0 && reference_noise < 1.0)) throw Error("--ref-noise must be a relative RMSE in [0, 1)");
+    if (!(reference_noise >= 0.0 && reference_noise < 1.0))
+      throw Error("--ref-noise must be a relative RMSE in [0, 1)");
     if (reference.width != camera.width || reference.height != camera.height)
       throw Error(*args.reference + ": the reference is " + std::to_string(reference.width) + "x" +
                   std::to_string(reference.height) + " but camera " + camera.name + " renders " +
@@ -148,14 +152,19 @@ int convergence(const ConvergenceCommandOptions& args) {
     half.seed = options.seed + 2000003;
     const IntegratorResult second = render_path(half);
     reference = first.image;
-    for (size_t i = 0; i < reference.pixels.size(); ++i) reference.pixels[i] = 0.5f * (first.image.pixels[i] + second.image.pixels[i]);
+    for (size_t i = 0; i < reference.pixels.size(); ++i)
+      reference.pixels[i] = 0.5f * (first.image.pixels[i] + second.image.pixels[i]);
     reference_noise = 0.5 * image_error(first.image, second.image, mask).relative_rmse;
     reference_seconds = first.seconds + second.seconds;
     write_image((out / "reference.exr").string(), reference,
-                {{"glaze:integrator", "path"}, {"glaze:spp", std::to_string(reference_spp)},
-                 {"glaze:seconds", std::to_string(reference_seconds)}, {"glaze:camera", camera.name}});
+                {{"glaze:integrator", "path"},
+                 {"glaze:spp", std::to_string(reference_spp)},
+                 {"glaze:seconds", std::to_string(reference_seconds)},
+                 {"glaze:camera", camera.name}});
   }
-  auto beyond_noise = [&](double error) { return std::sqrt(std::max(0.0, error * error - reference_noise * reference_noise)); };
+  auto beyond_noise = [&](double error) {
+    return std::sqrt(std::max(0.0, error * error - reference_noise * reference_noise));
+  };
 
   std::vector<Row> rows;
   for (long spp = 1; spp <= max_spp; spp *= 2) {
@@ -206,8 +215,7 @@ int convergence(const ConvergenceCommandOptions& args) {
       const double antialiasing = image_error(image, finest_ss[lmax], mask).relative_rmse;
       char line[160];
       std::snprintf(line, sizeof line, "%d,%d,%d,%.6g,%.6g,%.8f", lmax, kShSampling[s].ss, kShSampling[s].refined,
-                    truncation, antialiasing,
-                    sh_kernel_energy_fraction(lmax));
+                    truncation, antialiasing, sh_kernel_energy_fraction(lmax));
       split_lines.push_back(line);
     }
   }
@@ -224,13 +232,15 @@ int convergence(const ConvergenceCommandOptions& args) {
     for (const std::string& line : split_lines) split << line << '\n';
     if (!csv || !split) throw Error(out.string() + ": could not write the CSV files");
   }
-  nlohmann::json summary = {{"scene", scene.path},
-                            {"camera", camera.name},
-                            {"resolution", {camera.width, camera.height}},
-                            {"interior_pixels", rows.front().error.pixels},
-                            {"reference", {{"spp", reference_spp}, {"seconds", reference_seconds}, {"relative_noise", reference_noise}}}};
-  std::printf("%s, camera %s, %dx%d, %zu interior pixels; reference %ld spp (relative noise %.3g%%)\n", scene.path.c_str(),
-              camera.name.c_str(), camera.width, camera.height, rows.front().error.pixels, reference_spp, 100 * reference_noise);
+  nlohmann::json summary = {
+      {"scene", scene.path},
+      {"camera", camera.name},
+      {"resolution", {camera.width, camera.height}},
+      {"interior_pixels", rows.front().error.pixels},
+      {"reference", {{"spp", reference_spp}, {"seconds", reference_seconds}, {"relative_noise", reference_noise}}}};
+  std::printf("%s, camera %s, %dx%d, %zu interior pixels; reference %ld spp (relative noise %.3g%%)\n",
+              scene.path.c_str(), camera.name.c_str(), camera.width, camera.height, rows.front().error.pixels,
+              reference_spp, 100 * reference_noise);
   for (double target : kTargets) {
     char key[16];
     std::snprintf(key, sizeof key, "%g", target);
@@ -245,7 +255,8 @@ int convergence(const ConvergenceCommandOptions& args) {
     const auto [path_seconds, extrapolated] = path_time_to(rows, target);
     const Row* sh = fastest_sh_within(rows, target);
     nlohmann::json entry = {{"path_seconds", path_seconds}, {"path_extrapolated", extrapolated}};
-    std::printf("relative RMSE %.2g%%: path tracer %.3g s%s", 100 * target, path_seconds, extrapolated ? " (extrapolated)" : "");
+    std::printf("relative RMSE %.2g%%: path tracer %.3g s%s", 100 * target, path_seconds,
+                extrapolated ? " (extrapolated)" : "");
     if (sh) {
       entry["sh_seconds"] = sh->seconds;
       entry["sh_setting"] = sh->setting;
@@ -255,8 +266,8 @@ int convergence(const ConvergenceCommandOptions& args) {
       // time is what every further frame of the same lighting costs.
       entry["speedup_projection_cached"] = path_seconds / (sh->seconds - sh->projection_seconds);
       std::printf(", sh %.3g s (%s): %.0fx faster; %.0fx with the SH projection (%.3g s) cached\n", sh->seconds,
-                  sh->setting.c_str(), path_seconds / sh->seconds, path_seconds / (sh->seconds - sh->projection_seconds),
-                  sh->projection_seconds);
+                  sh->setting.c_str(), path_seconds / sh->seconds,
+                  path_seconds / (sh->seconds - sh->projection_seconds), sh->projection_seconds);
     } else {
       entry["sh_seconds"] = nullptr;
       std::printf(", sh: no setting reaches it\n");
@@ -271,18 +282,26 @@ int convergence(const ConvergenceCommandOptions& args) {
 
   LogLogPlot plot{"Relative RMSE against run time: " + std::filesystem::path(scene.path).filename().string() + ", " +
                       std::to_string(camera.width) + "x" + std::to_string(camera.height),
-                  "seconds (" + std::to_string(options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency())) + " threads)", "relative RMSE over the object", {}, {}};
+                  "seconds (" +
+                      std::to_string(options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency())) +
+                      " threads)",
+                  "relative RMSE over the object",
+                  {},
+                  {}};
   PlotSeries path_series{"path tracer", {}, {}, RGB(0.1f, 0.3f, 0.8f)};
   for (const Row& row : rows)
-    if (row.integrator == "path") path_series.x.push_back(row.seconds), path_series.y.push_back(row.error.relative_rmse);
+    if (row.integrator == "path")
+      path_series.x.push_back(row.seconds), path_series.y.push_back(row.error.relative_rmse);
   plot.series.push_back(path_series);
-  const RGB sh_colours[] = {RGB(0.9f, 0.5f, 0.1f), RGB(0.8f, 0.1f, 0.1f), RGB(0.2f, 0.6f, 0.2f), RGB(0.6f, 0.2f, 0.7f), RGB(0.1f, 0.6f, 0.7f)};
+  const RGB sh_colours[] = {RGB(0.9f, 0.5f, 0.1f), RGB(0.8f, 0.1f, 0.1f), RGB(0.2f, 0.6f, 0.2f), RGB(0.6f, 0.2f, 0.7f),
+                            RGB(0.1f, 0.6f, 0.7f)};
   static_assert(std::size(sh_colours) == std::size(kShSampling));
-  
+
   for (size_t k = 0; k < std::size(kShSampling); ++k) {
     PlotSeries series{"sh, " + kShSampling[k].label() + ", lmax 2..12", {}, {}, sh_colours[k]};
     for (const Row& row : rows)
-      if (row.integrator == "sh" && row.sampling == int(k)) series.x.push_back(row.seconds), series.y.push_back(row.error.relative_rmse);
+      if (row.integrator == "sh" && row.sampling == int(k))
+        series.x.push_back(row.seconds), series.y.push_back(row.error.relative_rmse);
     plot.series.push_back(series);
   }
   plot.lines = {{0.01, "1%"}, {0.003, "0.3%"}};
@@ -315,10 +334,11 @@ CommandRun declare_convergence(CLI::App& app) {
   add_threads(app, args->threads);
   add_max_depth(app, args->max_depth);
   add_environment_override(app, args->environment);
-  app.footer("Writes DIR/convergence.csv (seconds, relative RMSE, max error, RMSE beyond the reference noise),\n"
-             "split.csv (sh error from SH truncation and from anti-aliasing, kernel energy kept per lmax),\n"
-             "summary.json (time to 1% and 0.3%) and convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12\n"
-             "x ss 1, 2, 4, and ss 1 and 2 refined to 8 (--ss-refine 8).");
+  app.footer(
+      "Writes DIR/convergence.csv (seconds, relative RMSE, max error, RMSE beyond the reference noise),\n"
+      "split.csv (sh error from SH truncation and from anti-aliasing, kernel energy kept per lmax),\n"
+      "summary.json (time to 1% and 0.3%) and convergence.png (log-log plot). sh runs lmax 2, 4, 6, 8, 12\n"
+      "x ss 1, 2, 4, and ss 1 and 2 refined to 8 (--ss-refine 8).");
   return [args] { return convergence(*args); };
 }
 

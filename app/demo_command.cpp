@@ -50,11 +50,13 @@ int demo(const DemoCommandOptions& args) {
               result["R0"].get<double>() - truth["R0"].get<double>());
   const char* channel[] = {"Rd red  ", "Rd green", "Rd blue "};
   for (int c = 0; c < 3; ++c)
-    std::printf("  %s %.5f      %.5f     %+.5f\n", channel[c], result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(),
-                result["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
-  std::printf("\n  held-out views re-rendered with the recovered material, relative RMSE against their captures\n"
-              "  (mostly the captures' own Monte-Carlo noise at this spp; 0 would need noise-free captures):");
-  for (const auto& view : result["holdout"]) std::printf(" %.4f", view["relative_rmse"].is_null() ? NAN : view["relative_rmse"].get<double>());
+    std::printf("  %s %.5f      %.5f     %+.5f\n", channel[c], result["Rd"][c].get<double>(),
+                truth["Rd"][c].get<double>(), result["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
+  std::printf(
+      "\n  held-out views re-rendered with the recovered material, relative RMSE against their captures\n"
+      "  (mostly the captures' own Monte-Carlo noise at this spp; 0 would need noise-free captures):");
+  for (const auto& view : result["holdout"])
+    std::printf(" %.4f", view["relative_rmse"].is_null() ? NAN : view["relative_rmse"].get<double>());
   std::printf("\n  images: the captures in %s, re-renders and residuals in %s\n", captures.c_str(), fit.c_str());
   return 0;
 }
@@ -63,8 +65,9 @@ int demo(const DemoCommandOptions& args) {
 
 CommandRun declare_demo(CLI::App& app) {
   auto args = std::make_shared<DemoCommandOptions>();
-  app.description("the embedded default, end to end: captures of the red sphere in the procedural office,\n"
-                  "fitted, recovered against true material");
+  app.description(
+      "the embedded default, end to end: captures of the red sphere in the procedural office,\n"
+      "fitted, recovered against true material");
   add_text(app, "--out DIR", args->out, "where the captures and the fit go");
   add_spp(app, args->spp, "samples per pixel of the captures");
   add_resolution(app, "--res WxH", args->resolution, "size of the captures");

@@ -63,14 +63,16 @@ Image enlarge(const Image& image, int max_size) {
 
 }  // namespace
 
-FigurePanel picture_panel(const Image& image, const DisplaySettings& display, const std::string& caption, int max_size) {
+FigurePanel picture_panel(const Image& image, const DisplaySettings& display, const std::string& caption,
+                          int max_size) {
   const Image sized = enlarge(shrink(image, shrink_factor(image.width, image.height, max_size)), max_size);
   return {sized.width, sized.height, display_image(sized, display), caption};
 }
 
 FigurePanel error_panel(const Image& image, const Image& reference, std::span<const uint8_t> mask, float full_scale,
                         const std::string& caption, int max_size) {
-  if (image.width != reference.width || image.height != reference.height || mask.size() != size_t(image.width) * image.height)
+  if (image.width != reference.width || image.height != reference.height ||
+      mask.size() != size_t(image.width) * image.height)
     throw Error("error_panel: the image, the reference and the mask differ in size");
   double sum = 0.0;
   size_t count = 0;
@@ -98,7 +100,8 @@ float exposure_for(const Image& image) {
   double sum = 0.0;
   size_t count = 0;
   for (size_t p = 0; p * 3 < image.pixels.size(); ++p) {
-    const double luminance = 0.2126 * image.pixels[3 * p] + 0.7152 * image.pixels[3 * p + 1] + 0.0722 * image.pixels[3 * p + 2];
+    const double luminance =
+        0.2126 * image.pixels[3 * p] + 0.7152 * image.pixels[3 * p + 1] + 0.0722 * image.pixels[3 * p + 2];
     if (luminance > 0.0 && std::isfinite(luminance)) sum += luminance, ++count;
   }
   return count && sum > 0.0 ? float(std::log2(0.18 / (sum / count))) : 0.0f;
@@ -116,7 +119,8 @@ void write_figure(const std::string& path, const Figure& figure) {
       row_height[r] = std::max(row_height[r], panel.height + kLineHeight * int(lines_of(panel.caption).size()) + 6);
     }
   int label_width = 0;
-  for (const std::string& label : figure.row_labels) label_width = std::max(label_width, text_width(label, kTextSize) + kGap);
+  for (const std::string& label : figure.row_labels)
+    label_width = std::max(label_width, text_width(label, kTextSize) + kGap);
   int width = 2 * kMargin + label_width, height = 2 * kMargin + kTitleHeight;
   for (int w : column_width) width += w + kGap;
   for (int h : row_height) height += h + kGap;
@@ -129,8 +133,8 @@ void write_figure(const std::string& path, const Figure& figure) {
     if (r < figure.row_labels.size()) {
       const std::vector<std::string> label = lines_of(figure.row_labels[r]);
       for (size_t l = 0; l < label.size(); ++l)
-        canvas.text(kMargin, y + row_height[r] / 2 + int(l * kLineHeight) - int(label.size() * kLineHeight) / 2, label[l],
-                    kTextSize, Canvas::AlignX::Left);
+        canvas.text(kMargin, y + row_height[r] / 2 + int(l * kLineHeight) - int(label.size() * kLineHeight) / 2,
+                    label[l], kTextSize, Canvas::AlignX::Left);
     }
     int x = kMargin + label_width;
     for (size_t c = 0; c < figure.rows[r].size(); ++c) {
@@ -138,7 +142,8 @@ void write_figure(const std::string& path, const Figure& figure) {
       canvas.paste(x, y, panel.width, panel.height, panel.srgb);
       const std::vector<std::string> caption = lines_of(panel.caption);
       for (size_t l = 0; l < caption.size(); ++l)
-        canvas.text(x, y + panel.height + 4 + int(l * kLineHeight) + kLineHeight / 2, caption[l], 12, Canvas::AlignX::Left);
+        canvas.text(x, y + panel.height + 4 + int(l * kLineHeight) + kLineHeight / 2, caption[l], 12,
+                    Canvas::AlignX::Left);
       x += column_width[c] + kGap;
     }
     y += row_height[r] + kGap;

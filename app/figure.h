@@ -23,7 +23,8 @@ struct FigurePanel {
 // `image` under `display`, brought to at most `max_size` pixels on its longer side by
 // a whole factor: shrunk by box filtering, or a small one (a texture) enlarged with
 // nearest texels.
-FigurePanel picture_panel(const Image& image, const DisplaySettings& display, const std::string& caption, int max_size = 256);
+FigurePanel picture_panel(const Image& image, const DisplaySettings& display, const std::string& caption,
+                          int max_size = 256);
 
 // |image - reference| / (reference's mean over the mask), per pixel the largest over the
 // channels, in false colour from 0 (dark) to `full_scale` (yellow); pixels outside the

@@ -98,7 +98,8 @@ void FitPreview::render_loop() {
     // never the fit: it is reported and the window shows no more states.
     try {
       const std::shared_ptr<const Environment> environment = state.environment();
-      for (const View& v : views_) predicted.push_back(render_sh(*state.scene, *tracer_, *environment, v.camera, options));
+      for (const View& v : views_)
+        predicted.push_back(render_sh(*state.scene, *tracer_, *environment, v.camera, options));
     } catch (const std::exception& error) {
       std::fprintf(stderr, "glaze: warning: the preview stops: %s\n", error.what());
       std::lock_guard lock(mutex_);
@@ -141,7 +142,8 @@ std::vector<uint8_t> FitPreview::compose(int& width, int& height) {
     const Image observed = shrink_image(views_[v].observed, shrink_);
     const Image model = shrink_image(predicted[v], shrink_);
     Image residual(observed.width, observed.height);
-    for (size_t k = 0; k < residual.pixels.size(); ++k) residual.pixels[k] = std::abs(observed.pixels[k] - model.pixels[k]);
+    for (size_t k = 0; k < residual.pixels.size(); ++k)
+      residual.pixels[k] = std::abs(observed.pixels[k] - model.pixels[k]);
     const std::vector<uint8_t> panels[3] = {display_image(observed, display_), display_image(model, display_),
                                             display_image(residual, residual_display)};
     for (int p = 0; p < 3; ++p)
@@ -225,8 +227,8 @@ void FitPreview::show_until_closed(PreviewWindow& window, int frames, const std:
     if (begun && rendered != drawn) {
       canvas = compose(width, height);
       drawn = rendered;
-      window.set_title("glaze invert-fit | " + (label.empty() ? std::string("starting") : label) + (done ? " | done" : "") +
-                       " | observed | predicted | residual x8");
+      window.set_title("glaze invert-fit | " + (label.empty() ? std::string("starting") : label) +
+                       (done ? " | done" : "") + " | observed | predicted | residual x8");
     }
     if (!canvas.empty()) window.draw(width, height, canvas);
     if (frames > 0 && ++shown >= frames) {

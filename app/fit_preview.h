@@ -34,7 +34,7 @@ struct FitPreviewState {
   // The current lighting; called on the render thread, for the newest state only (the
   // joint fit's lighting at an iterate is a solve that the solver should not wait for).
   std::function<std::shared_ptr<const Environment>()> environment;
-  std::string label;                   // for the title: what the solver is at
+  std::string label;  // for the title: what the solver is at
 };
 
 class FitPreview {
@@ -65,17 +65,17 @@ class FitPreview {
   void show_until_closed(PreviewWindow& window, int frames, const std::string& screenshot);
 
   DisplaySettings display_;
-  std::vector<View> views_;            // set by begin(), then read-only
+  std::vector<View> views_;  // set by begin(), then read-only
   const RayTracer* tracer_ = nullptr;
   int lmax_ = 0, footprint_ = 1, shrink_ = 1;
 
   std::mutex mutex_;
   std::condition_variable changed_;
-  FitPreviewState pending_;            // guarded: newest state not yet rendered
+  FitPreviewState pending_;  // guarded: newest state not yet rendered
   bool begun_ = false, has_pending_ = false, stop_ = false, fit_done_ = false, fit_failed_ = false,
        render_failure_ = false;
-  std::vector<Image> predicted_;       // guarded: the newest rendered state's views
-  std::string shown_label_;            // guarded
+  std::vector<Image> predicted_;           // guarded: the newest rendered state's views
+  std::string shown_label_;                // guarded
   uint64_t rendered_ = 0, submitted_ = 0;  // guarded: states rendered / handed over
   std::thread renderer_;
 };

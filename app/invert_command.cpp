@@ -53,8 +53,9 @@ int run_invert_fit(const InvertFitOptions& args) {
 
 CommandRun declare_invert_fit(CLI::App& app) {
   auto args = std::make_shared<InvertFitOptions>();
-  app.description("recover the material (or R0 and a diffuse texture) under known lighting, the lighting from\n"
-                  "an object of known material, or both together (joint)");
+  app.description(
+      "recover the material (or R0 and a diffuse texture) under known lighting, the lighting from\n"
+      "an object of known material, or both together (joint)");
   add_text(app, "CAPTURES", args->captures, "a capture set: DIR/transforms.json (glaze render --captures DIR)")
       ->required();
   add_choice(app, "--mode MODE", args->mode, {"material", "texture", "lighting", "joint"}, "what is recovered")
@@ -96,12 +97,12 @@ CommandRun declare_invert_fit(CLI::App& app) {
   CLI::Option* solve_resolution =
       add_resolution(app, "--solve-res WxH", args->solve_resolution, "the map solved with L_lm (default 64x32)");
   CLI::Option* ridge = add_real(app, "--ridge R", args->ridge, "relative Tikhonov weight (default 1e-6)");
-  CLI::Option* diffuse_lmax = add_integer(
-      app, "--diffuse-lmax N", args->diffuse_lmax, 0, kShMaxLmax,
-      "0: off. For captures whose diffuse term has every band (photographs, the path tracer), a\n"
-      "second pass with the bands lmax+1..N predicted from the first pass's lighting (joint: more,\n"
-      "each from the last, while R0 or Rd moves by 1e-3; at most --max-passes) (N <= lmax: off;\n"
-      "sh captures: at most their own lmax)");
+  CLI::Option* diffuse_lmax =
+      add_integer(app, "--diffuse-lmax N", args->diffuse_lmax, 0, kShMaxLmax,
+                  "0: off. For captures whose diffuse term has every band (photographs, the path tracer), a\n"
+                  "second pass with the bands lmax+1..N predicted from the first pass's lighting (joint: more,\n"
+                  "each from the last, while R0 or Rd moves by 1e-3; at most --max-passes) (N <= lmax: off;\n"
+                  "sh captures: at most their own lmax)");
   CLI::Option* max_passes = add_integer(app, "--max-passes N", args->max_passes, 1, 100,
                                         "of --mode joint (default 12; 1: one pass): passes that end with R0 or Rd\n"
                                         "still moving are reported (fit.json passes_settled) and warned");
@@ -116,9 +117,10 @@ CommandRun declare_invert_fit(CLI::App& app) {
   add_display_options(app, args->display);
   for (const char* name : {"--frames", "--screenshot", "--exposure", "--tone-map"})
     app.get_option(name)->needs(preview)->group("--preview");
-  app.footer("Writes DIR/fit.json, solver.txt (Ceres's report; for lighting, the linear solve's),\n"
-             "render_view_NNN.exr and residual_view_NNN.exr (observed - predicted), texture.exr (RGBA,\n"
-             "alpha 0 = unknown) for --mode texture, lighting.exr and lighting_coverage.png for --mode lighting.");
+  app.footer(
+      "Writes DIR/fit.json, solver.txt (Ceres's report; for lighting, the linear solve's),\n"
+      "render_view_NNN.exr and residual_view_NNN.exr (observed - predicted), texture.exr (RGBA,\n"
+      "alpha 0 = unknown) for --mode texture, lighting.exr and lighting_coverage.png for --mode lighting.");
 
   // The options that a mode does not take, and the values that depend on the mode.
   app.callback([args, holdout, texture_resolution, lighting_resolution, solve_resolution, ridge, diffuse_lmax, R0, Rd,
@@ -132,13 +134,15 @@ CommandRun declare_invert_fit(CLI::App& app) {
     if (mode != "lighting" && (R0->count() || Rd->count()))
       throw Error("--R0 and --Rd give the known material of --mode lighting");
     if (lighting && (loss->count() || loss_scale->count()))
-      throw Error("--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least "
-                  "squares)");
+      throw Error(
+          "--loss and --loss-scale apply to --mode material and texture (the lighting solve is linear least "
+          "squares)");
     if (R0->count() != Rd->count())
       throw Error("--R0 and --Rd go together: give the whole known material (or neither, to use the capture set's)");
     if (holdout->count())
-      throw Error("--holdout names cameras of `glaze render --captures`; the held-out captures of invert-fit are "
-                  "--holdout-dir DIR (default: CAPTURES/holdout)");
+      throw Error(
+          "--holdout names cameras of `glaze render --captures`; the held-out captures of invert-fit are "
+          "--holdout-dir DIR (default: CAPTURES/holdout)");
     if (lighting && args->lmax && *args->lmax > 8)
       throw Error("--lmax: '" + std::to_string(*args->lmax) + "' is not an integer in [0, 8] (--mode " + mode + ")");
     RobustLoss::parse(args->loss, args->loss_scale);

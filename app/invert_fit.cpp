@@ -39,7 +39,8 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
     const std::string residual_file = (out / ("residual_" + std::string(name))).string();
     write_image(render_file, predicted, rendered.metadata);
     write_image(residual_file, residual);
-    nlohmann::json view = {{"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
+    nlohmann::json view = {
+        {"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
     const std::vector<uint8_t> mask = interior_mask(tracer, camera);
     try {
       view["relative_rmse"] = image_error(predicted, observed, mask).relative_rmse;
@@ -53,7 +54,6 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
 
 }  // namespace
 
-
 nlohmann::json rgb_json(const RGB& c) { return {c[0], c[1], c[2]}; }
 
 nlohmann::json material_json(const CaptureMaterial& material) {
@@ -63,10 +63,9 @@ nlohmann::json material_json(const CaptureMaterial& material) {
 }
 
 nlohmann::json drops_json(const DropCounts& d) {
-  return {{"grazing", d.grazing}, {"silhouette", d.silhouette}, {"non_finite", d.non_finite},
-          {"saturated", d.saturated}, {"masked", d.masked}, {"hidden", d.hidden}};
+  return {{"grazing", d.grazing},     {"silhouette", d.silhouette}, {"non_finite", d.non_finite},
+          {"saturated", d.saturated}, {"masked", d.masked},         {"hidden", d.hidden}};
 }
-
 
 FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds) {
   FitInputs in;
@@ -77,9 +76,11 @@ FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_sec
   in.samples = collect_samples(in.captures, *in.tracer, in.scene, args.samples);
   stage_seconds["samples"] = seconds_since(stage);
   const DropCounts dropped = in.samples.total_dropped();
-  std::printf("%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, %zu hidden)\n",
-              in.samples.samples.size(), in.captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
-              dropped.saturated, dropped.masked, dropped.hidden);
+  std::printf(
+      "%zu samples from %zu views (dropped: %zu grazing, %zu silhouette, %zu not finite, %zu saturated, %zu masked, "
+      "%zu hidden)\n",
+      in.samples.samples.size(), in.captures.frames.size(), dropped.grazing, dropped.silhouette, dropped.non_finite,
+      dropped.saturated, dropped.masked, dropped.hidden);
   return in;
 }
 
@@ -143,7 +144,8 @@ std::string iterate_label(const FitIterate& it) {
 }
 
 std::function<std::shared_ptr<const Environment>()> borrowed(const Environment& environment) {
-  return [&environment] { return std::shared_ptr<const Environment>(std::shared_ptr<const Environment>{}, &environment); };
+  return
+      [&environment] { return std::shared_ptr<const Environment>(std::shared_ptr<const Environment>{}, &environment); };
 }
 
 }  // namespace glaze::invert_fit

@@ -29,8 +29,8 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
   if (R0 < 0.0f || (Rd < 0.0f).any()) {
     const std::string missing = R0 < 0.0f ? (args.R0 ? "--R0 is negative" : "R0 is not given")
                                           : (!args.Rd.empty() ? "--Rd is negative" : "Rd is not given");
-    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.directory +
-                "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
+    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " +
+                captures.directory + "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
   }
   return PolishedMaterial(R0, Rd);  // validates the ranges
 }
@@ -60,8 +60,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   // (sh captures above the fit's lmax have their bands up to their own lmax only.)
   const int capture_lmax = capture_defaults(in.captures, kShMaxLmax + 1).second;
   const bool band_limited = capture_lmax <= lmax;
-  const int diffuse_lmax =
-      band_limited ? lmax : std::min(capture_lmax, args.diffuse_lmax);
+  const int diffuse_lmax = band_limited ? lmax : std::min(capture_lmax, args.diffuse_lmax);
   LightingData data =
       gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint, noise_free_captures(in.captures));
   stage_seconds["gather"] = seconds_since(stage);
@@ -78,7 +77,8 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
     observer = [&](const FitIterate& it) {
       const auto lighting = std::make_shared<const Environment>(fit_lighting(data, it.R0, it.Rd, options).map,
                                                                 EnvironmentOptions{}, "lighting at the iterate");
-      show_in_preview(preview, in.scene, it.R0, it.Rd, [lighting] { return lighting; }, iterate_label(it));
+      show_in_preview(
+          preview, in.scene, it.R0, it.Rd, [lighting] { return lighting; }, iterate_label(it));
     };
   if (joint) {
     joint_options.max_rounds = args.max_iterations.value_or(joint_options.max_rounds);
@@ -86,10 +86,11 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
     joint_options.band_limited_diffuse = band_limited;
     joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
   }
-  const PolishedMaterial material = joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
-  const LightingFit fit = joint ? joint_fit->lighting
-                                : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(),
-                                                         options);
+  const PolishedMaterial material =
+      joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
+  const LightingFit fit =
+      joint ? joint_fit->lighting
+            : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
 
   std::filesystem::create_directories(out);
@@ -101,15 +102,31 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   write_image(mask_file, mask);
   nlohmann::json L = nlohmann::json::array();
   for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
-  nlohmann::json result = {{"mode", joint ? "joint" : "lighting"}, {"R0", material.R0()}, {"Rd", rgb_json(material.Rd())}, {"lmax", lmax},
-                           {"L_lm", L}, {"condition_number", fit.condition}, {"ridge", options.ridge},
-                           {"normal_coverage", data.normal_coverage}, {"map", map_file}, {"coverage_mask", mask_file},
-                           {"map_resolution", {options.width, options.height}}, {"solve_resolution", {options.solve_width, options.solve_height}}, {"covered_fraction", fit.covered_fraction},
-                           {"mirror_share", fit.mirror_share}, {"channel_mirror_share", rgb_json(fit.channel_mirror_share.cast<float>())}, {"multi_view_fraction", fit.multi_view_fraction},
-                           {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"}, {"samples", in.samples.samples.size()},
-                           {"dropped", drops_json(in.samples.total_dropped())}, {"pixel_footprint", footprint},
-                           {"band_limited_diffuse", band_limited}, {"diffuse_lmax", data.diffuse_lmax},
-                           {"passes", joint ? joint_fit->passes : data.diffuse_lmax > lmax ? 2 : 1}};
+  nlohmann::json result = {{"mode", joint ? "joint" : "lighting"},
+                           {"R0", material.R0()},
+                           {"Rd", rgb_json(material.Rd())},
+                           {"lmax", lmax},
+                           {"L_lm", L},
+                           {"condition_number", fit.condition},
+                           {"ridge", options.ridge},
+                           {"normal_coverage", data.normal_coverage},
+                           {"map", map_file},
+                           {"coverage_mask", mask_file},
+                           {"map_resolution", {options.width, options.height}},
+                           {"solve_resolution", {options.solve_width, options.solve_height}},
+                           {"covered_fraction", fit.covered_fraction},
+                           {"mirror_share", fit.mirror_share},
+                           {"channel_mirror_share", rgb_json(fit.channel_mirror_share.cast<float>())},
+                           {"multi_view_fraction", fit.multi_view_fraction},
+                           {"solve", fit.map_consistent ? "map-consistent" : "sh-least-squares"},
+                           {"samples", in.samples.samples.size()},
+                           {"dropped", drops_json(in.samples.total_dropped())},
+                           {"pixel_footprint", footprint},
+                           {"band_limited_diffuse", band_limited},
+                           {"diffuse_lmax", data.diffuse_lmax},
+                           {"passes", joint                      ? joint_fit->passes
+                                      : data.diffuse_lmax > lmax ? 2
+                                                                 : 1}};
   const LightingDiagnostics diagnostics = diagnose_lighting(fit, data, options, joint ? &*joint_fit : nullptr);
   for (const std::string& warning : diagnostics.warnings) warn(warning);
   if (joint) {
@@ -145,7 +162,8 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   // Shared with the preview's state, which may outlive this scope's locals.
   const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
   for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
-  show_in_preview(preview, in.scene, material.R0(), material.Rd(), [recovered] { return recovered; }, "recovered lighting");
+  show_in_preview(
+      preview, in.scene, material.R0(), material.Rd(), [recovered] { return recovered; }, "recovered lighting");
   write_renders(args, in, in.scene, *recovered, lmax, footprint, out, result);
   double worst_view = 0.0;
   for (const auto& view : result["renders"])
@@ -159,13 +177,15 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   write_fit(out, result, joint ? joint_fit->full_report : diagnostics.linear_report);
   if (joint)
     std::printf("joint: R0 = %.5f, Rd = %.5f %.5f %.5f (%d rounds, %s)\n", material.R0(), material.Rd()[0],
-                material.Rd()[1], material.Rd()[2], joint_fit->iterations, joint_fit->converged ? "converged" : "NOT converged");
-  std::printf("lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
-              lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
-              100 * fit.mirror_share);
-  if (result.contains("reference_L_lm_error_l2"))
-  {
-    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00", 100 * result["reference_L_lm_error_l2"].get<double>());
+                material.Rd()[1], material.Rd()[2], joint_fit->iterations,
+                joint_fit->converged ? "converged" : "NOT converged");
+  std::printf(
+      "lighting: lmax %d, condition number %.3g, normals cover %.0f%%, map %dx%d covered %.1f%%, mirror share %.1f%%\n",
+      lmax, fit.condition, 100 * data.normal_coverage, options.width, options.height, 100 * fit.covered_fraction,
+      100 * fit.mirror_share);
+  if (result.contains("reference_L_lm_error_l2")) {
+    std::printf("against the true lighting: L_lm (l <= 2) max error %.3f%% of L00",
+                100 * result["reference_L_lm_error_l2"].get<double>());
     if (result.contains("reference_map_error") && result["reference_map_error"].contains("64x32") &&
         result["reference_map_error"]["64x32"]["relative_rmse"].is_number())
       std::printf("; map relative RMSE at 64x32 %.2f%% over %d covered cells",

@@ -60,8 +60,8 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   stage = Clock::now();
   MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
   std::filesystem::create_directories(out);
-  nlohmann::json result = {{"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.loss},
-                           {"pixel_footprint", footprint}};
+  nlohmann::json result = {
+      {"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.loss}, {"pixel_footprint", footprint}};
   std::optional<RecoveredTexture> texture;
   if (mode == "material") {
     result["Rd"] = rgb_json(fit.Rd[0]);
@@ -105,8 +105,10 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   nlohmann::json per_view = nlohmann::json::array();
   const std::vector<ViewResidual> residuals = view_residuals(samples, terms, fit, texture ? &*texture : nullptr);
   for (size_t f = 0; f < captures.frames.size(); ++f)
-    per_view.push_back({{"file", captures.frames[f].file_path}, {"samples", samples.per_frame[f]},
-                        {"dropped", drops_json(samples.dropped[f])}, {"rms", residuals[f].rms},
+    per_view.push_back({{"file", captures.frames[f].file_path},
+                        {"samples", samples.per_frame[f]},
+                        {"dropped", drops_json(samples.dropped[f])},
+                        {"rms", residuals[f].rms},
                         {"relative_rms", residuals[f].relative_rms}});
   result["views"] = per_view;
 
@@ -120,8 +122,9 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
     }
   }
   // The scene already carries the fitted material (or texture): shown as it is.
-  if (preview) show_in_preview(preview, scene, scene.materials.front().R0, scene.materials.front().Rd, borrowed(environment),
-                               "final: R0 " + std::to_string(fit.R0));
+  if (preview)
+    show_in_preview(preview, scene, scene.materials.front().R0, scene.materials.front().Rd, borrowed(environment),
+                    "final: R0 " + std::to_string(fit.R0));
   write_renders(args, in, scene, environment, lmax, footprint, out, result);
   stage_seconds["renders"] = seconds_since(stage);
   result["stage_seconds"] = stage_seconds;
@@ -129,10 +132,15 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   write_fit(out, result, fit.full_report);
 
   std::printf("R0 = %.5f", fit.R0);
-  if (!texture) std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);
-  else std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height, 100 * texture->coverage);
-  if (result.contains("texture_rmse")) std::printf(", texel RMSE against the reference %.4f", result["texture_rmse"].get<double>());
-  std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations, fit.converged ? "converged" : "NOT converged");
+  if (!texture)
+    std::printf(", Rd = %.5f %.5f %.5f", fit.Rd[0][0], fit.Rd[0][1], fit.Rd[0][2]);
+  else
+    std::printf(", texture %dx%d, %.1f%% of texels known", texture->Rd.width, texture->Rd.height,
+                100 * texture->coverage);
+  if (result.contains("texture_rmse"))
+    std::printf(", texel RMSE against the reference %.4f", result["texture_rmse"].get<double>());
+  std::printf("  (rms %.4g, %d iterations, %s)\n", fit.rms, fit.iterations,
+              fit.converged ? "converged" : "NOT converged");
   if (captures.material) {
     const PolishedMaterial& truth = captures.material->material;
     std::printf("true R0 = %.5f", truth.R0());

@@ -16,7 +16,7 @@ namespace glaze {
 CommandRun declare_preview(CLI::App& app) {
   app.description("a window that shows the render as it refines: not in this glaze (GLAZE_PREVIEW=OFF)");
   app.allow_extras();
-  return [] () -> int { throw Error(kNoPreview); };
+  return []() -> int { throw Error(kNoPreview); };
 }
 #endif
 

@@ -19,9 +19,7 @@ OrbitCamera::OrbitCamera(const PinholeCamera& camera, const Vec3& scene_centre) 
   pivot_ = camera.position() + distance_ * forward;
 }
 
-void OrbitCamera::place() {
-  camera_.camera_to_world.translation() = pivot_ - distance_ * forward_of(camera_);
-}
+void OrbitCamera::place() { camera_.camera_to_world.translation() = pivot_ - distance_ * forward_of(camera_); }
 
 void OrbitCamera::orbit(float yaw, float pitch) {
   const Vec3 up(0.0f, 1.0f, 0.0f);

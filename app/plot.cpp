@@ -26,11 +26,12 @@ std::pair<int, int> decades(const std::vector<double>& values) {
 
 std::string decade_label(int exponent) {
   char text[32];
-  if (exponent >= -3 && exponent <= 4) std::snprintf(text, sizeof text, "%g", std::pow(10.0, exponent));
-  else std::snprintf(text, sizeof text, "1e%d", exponent);
+  if (exponent >= -3 && exponent <= 4)
+    std::snprintf(text, sizeof text, "%g", std::pow(10.0, exponent));
+  else
+    std::snprintf(text, sizeof text, "1e%d", exponent);
   return text;
 }
-
 
 }  // namespace
 
@@ -57,12 +58,14 @@ void write_loglog_plot(const std::string& path, const LogLogPlot& plot) {
 
   // Grid: decades and their 2..9 subdivisions; decade labels on both axes.
   for (int e = x_first; e <= x_last; ++e) {
-    for (int k = 2; k <= 9 && e < x_last; ++k) canvas.line(px(k * std::pow(10.0, e)), kTop, px(k * std::pow(10.0, e)), bottom, minor);
+    for (int k = 2; k <= 9 && e < x_last; ++k)
+      canvas.line(px(k * std::pow(10.0, e)), kTop, px(k * std::pow(10.0, e)), bottom, minor);
     canvas.line(px(std::pow(10.0, e)), kTop, px(std::pow(10.0, e)), bottom, grid);
     canvas.text(px(std::pow(10.0, e)), bottom + 18, decade_label(e), 15, AlignX::Center);
   }
   for (int e = y_first; e <= y_last; ++e) {
-    for (int k = 2; k <= 9 && e < y_last; ++k) canvas.line(kLeft, py(k * std::pow(10.0, e)), right, py(k * std::pow(10.0, e)), minor);
+    for (int k = 2; k <= 9 && e < y_last; ++k)
+      canvas.line(kLeft, py(k * std::pow(10.0, e)), right, py(k * std::pow(10.0, e)), minor);
     canvas.line(kLeft, py(std::pow(10.0, e)), right, py(std::pow(10.0, e)), grid);
     canvas.text(kLeft - 8, py(std::pow(10.0, e)), decade_label(e), 15, AlignX::Right);
   }
@@ -93,8 +96,7 @@ void write_loglog_plot(const std::string& path, const LogLogPlot& plot) {
     legend_y += 22;
   }
   canvas.write(path);
-  if (!canvas.text_ok())
-    warn(path + ": the plot has no text " + std::string(Canvas::kNoFont));
+  if (!canvas.text_ok()) warn(path + ": the plot has no text " + std::string(Canvas::kNoFont));
 }
 
 }  // namespace glaze

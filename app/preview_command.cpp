@@ -40,7 +40,6 @@ constexpr const char* kKeyHelp = R"(glaze preview keys:
   H / F1               this help               Q / Esc   quit
 )";
 
-
 struct PreviewCommandOptions {
   std::string scene;
   std::optional<std::string> camera;
@@ -63,7 +62,8 @@ enum class FalseColour { off, relative_error, n_dot_v };
 // The centre of the scene's bounding box: the orbit pivot's hint.
 Vec3 scene_centre(const Scene& scene) {
   Eigen::AlignedBox3f box;
-  for (const Sphere& s : scene.spheres) box.extend(s.center - Vec3::Constant(s.radius)), box.extend(s.center + Vec3::Constant(s.radius));
+  for (const Sphere& s : scene.spheres)
+    box.extend(s.center - Vec3::Constant(s.radius)), box.extend(s.center + Vec3::Constant(s.radius));
   for (const TriangleMesh& m : scene.meshes)
     for (const Vec3& p : m.positions) box.extend(p);
   return box.isEmpty() ? Vec3::Zero() : Vec3(box.center());
@@ -77,7 +77,8 @@ std::vector<float> sh_against_path(const PreviewFrame& frame) {
   for (size_t p = 0; p < values.size(); ++p) {
     const float reference = luminance(frame.path.at(int(p % frame.path.width), int(p / frame.path.width)));
     if (reference > 0.0f)
-      values[p] = std::abs(luminance(frame.sh.at(int(p % frame.sh.width), int(p / frame.sh.width))) - reference) / reference;
+      values[p] =
+          std::abs(luminance(frame.sh.at(int(p % frame.sh.width), int(p / frame.sh.width))) - reference) / reference;
   }
   return values;
 }
@@ -100,8 +101,9 @@ std::vector<uint8_t> picture(const PreviewFrame& frame, const ViewState& view) {
   switch (view.false_colour) {
     case FalseColour::relative_error:
       // 0.1% (dark) to 100% (bright), logarithmic.
-      return false_colour_image(view.integrator == PreviewIntegrator::path ? frame.path_relative_error : sh_against_path(frame),
-                                w, h, 1e-3f, 1.0f, true);
+      return false_colour_image(
+          view.integrator == PreviewIntegrator::path ? frame.path_relative_error : sh_against_path(frame), w, h, 1e-3f,
+          1.0f, true);
     case FalseColour::n_dot_v:
       return false_colour_image(frame.n_dot_v, w, h, 0.0f, 1.0f, false);
     case FalseColour::off:
@@ -110,8 +112,8 @@ std::vector<uint8_t> picture(const PreviewFrame& frame, const ViewState& view) {
   return display_image(shown_image(frame, view.integrator), view.display);
 }
 
-std::string title(const std::string& camera, const PreviewFrame* frame, const ViewState& view, const ShIntegratorOptions& sh,
-                  double elapsed) {
+std::string title(const std::string& camera, const PreviewFrame* frame, const ViewState& view,
+                  const ShIntegratorOptions& sh, double elapsed) {
   char text[512];
   std::string integrator = view.integrator == PreviewIntegrator::sh
                                ? "sh lmax " + std::to_string(sh.lmax) + " ss " + std::to_string(sh.supersampling)
@@ -121,10 +123,12 @@ std::string title(const std::string& camera, const PreviewFrame* frame, const Vi
   if (!frame || substitute) integrator += " (rendering...)";
   const int spp = frame ? frame->path_spp : 0;
   const double rate = frame && frame->path_seconds > 0
-                          ? double(spp) * frame->camera.width * frame->camera.height / frame->path_seconds / 1e6 : 0.0;
+                          ? double(spp) * frame->camera.width * frame->camera.height / frame->path_seconds / 1e6
+                          : 0.0;
   const char* views[] = {"", " | relative error 0.1%..100% (log)", " | n.v 0..1"};
-  const char* error_against = view.false_colour == FalseColour::relative_error && view.integrator == PreviewIntegrator::sh
-                                  ? " against path" : "";
+  const char* error_against =
+      view.false_colour == FalseColour::relative_error && view.integrator == PreviewIntegrator::sh ? " against path"
+                                                                                                   : "";
   std::snprintf(text, sizeof text, "glaze preview | %s | %s | %d spp, %.2f M samples/s | %.1f s | EV %+g %s%s%s",
                 camera.c_str(), integrator.c_str(), spp, rate, elapsed, view.display.exposure_ev,
                 tone_mapping_name(view.display.tone_mapping), views[int(view.false_colour)], error_against);
@@ -194,12 +198,15 @@ int preview(const PreviewCommandOptions& args) {
     // The first number not used yet: an earlier session's saves are never overwritten.
     std::string stem;
     do {
-      stem = (save_dir / (std::filesystem::path(scene.path).stem().string() + "_" + scene.cameras[camera_index].name + "_" +
-                          std::to_string(saved++))).string();
+      stem = (save_dir / (std::filesystem::path(scene.path).stem().string() + "_" + scene.cameras[camera_index].name +
+                          "_" + std::to_string(saved++)))
+                 .string();
     } while (std::filesystem::exists(stem + ".exr") || std::filesystem::exists(stem + ".png"));
     const bool sh = &shown_image(*frame, view.integrator) == &frame->sh;
     write_image(stem + ".exr", shown_image(*frame, view.integrator),
-                {{"glaze:integrator", sh ? "sh" : "path"}, {"glaze:spp", std::to_string(frame->path_spp)}, {"glaze:scene", scene.path}});
+                {{"glaze:integrator", sh ? "sh" : "path"},
+                 {"glaze:spp", std::to_string(frame->path_spp)},
+                 {"glaze:scene", scene.path}});
     write_picture(stem + ".png", frame->camera.width, frame->camera.height, picture(*frame, view),
                   {{"glaze:exposure", std::to_string(view.display.exposure_ev)},
                    {"glaze:tone_mapping", tone_mapping_name(view.display.tone_mapping)}});
@@ -208,19 +215,43 @@ int preview(const PreviewCommandOptions& args) {
   window.on_key = [&](int key, int mods) {
     const bool shift = mods & GLFW_MOD_SHIFT;
     switch (key) {
-      case GLFW_KEY_ESCAPE: case GLFW_KEY_Q: window.close(); break;
-      case GLFW_KEY_H: case GLFW_KEY_F1: std::fputs(kKeyHelp, stdout); std::fflush(stdout); break;
-      case GLFW_KEY_R: select_camera(camera_index); break;
-      case GLFW_KEY_C: select_camera((camera_index + (shift ? scene.cameras.size() - 1 : 1)) % scene.cameras.size()); break;
+      case GLFW_KEY_ESCAPE:
+      case GLFW_KEY_Q:
+        window.close();
+        break;
+      case GLFW_KEY_H:
+      case GLFW_KEY_F1:
+        std::fputs(kKeyHelp, stdout);
+        std::fflush(stdout);
+        break;
+      case GLFW_KEY_R:
+        select_camera(camera_index);
+        break;
+      case GLFW_KEY_C:
+        select_camera((camera_index + (shift ? scene.cameras.size() - 1 : 1)) % scene.cameras.size());
+        break;
       case GLFW_KEY_I:
         view.integrator = view.integrator == PreviewIntegrator::sh ? PreviewIntegrator::path : PreviewIntegrator::sh;
         renderer.set_integrator(view.integrator);
         break;
-      case GLFW_KEY_EQUAL: case GLFW_KEY_KP_ADD: view.display.exposure_ev += 1.0f; break;
-      case GLFW_KEY_MINUS: case GLFW_KEY_KP_SUBTRACT: view.display.exposure_ev -= 1.0f; break;
-      case GLFW_KEY_0: case GLFW_KEY_KP_0: view.display.exposure_ev = args.display.exposure_ev; break;
-      case GLFW_KEY_T: view.display.tone_mapping = ToneMapping((int(view.display.tone_mapping) + 1) % 3); break;
-      case GLFW_KEY_F: view.false_colour = FalseColour((int(view.false_colour) + 1) % 3); break;
+      case GLFW_KEY_EQUAL:
+      case GLFW_KEY_KP_ADD:
+        view.display.exposure_ev += 1.0f;
+        break;
+      case GLFW_KEY_MINUS:
+      case GLFW_KEY_KP_SUBTRACT:
+        view.display.exposure_ev -= 1.0f;
+        break;
+      case GLFW_KEY_0:
+      case GLFW_KEY_KP_0:
+        view.display.exposure_ev = args.display.exposure_ev;
+        break;
+      case GLFW_KEY_T:
+        view.display.tone_mapping = ToneMapping((int(view.display.tone_mapping) + 1) % 3);
+        break;
+      case GLFW_KEY_F:
+        view.false_colour = FalseColour((int(view.false_colour) + 1) % 3);
+        break;
       case GLFW_KEY_S:
         try {
           save();
@@ -228,12 +259,15 @@ int preview(const PreviewCommandOptions& args) {
           std::fprintf(stderr, "glaze: error: %s\n", error.what());
         }
         break;
-      default: return;
+      default:
+        return;
     }
     dirty = true;
   };
   // Mouse motion (screen units) to picture pixels.
-  auto picture_scale = [&] { return window.picture_pixels_per_screen_unit(orbit.camera().width, orbit.camera().height); };
+  auto picture_scale = [&] {
+    return window.picture_pixels_per_screen_unit(orbit.camera().width, orbit.camera().height);
+  };
   window.on_drag = [&](double dx, double dy, int button, int mods) {
     const double scale = picture_scale();
     if (button == 2) {
@@ -259,7 +293,8 @@ int preview(const PreviewCommandOptions& args) {
   auto last_title = Clock::time_point{};
   std::vector<uint8_t> pixels;
   while (!window.should_close()) {
-    const std::shared_ptr<const PreviewFrame> newest = frames > 0 ? renderer.wait_newer(shown_version) : renderer.latest();
+    const std::shared_ptr<const PreviewFrame> newest =
+        frames > 0 ? renderer.wait_newer(shown_version) : renderer.latest();
     if (newest && newest->version != shown_version) frame = newest, shown_version = newest->version, dirty = true;
     if (dirty && frame) {
       pixels = picture(*frame, view);
@@ -268,7 +303,8 @@ int preview(const PreviewCommandOptions& args) {
     }
     if (!pixels.empty()) window.draw(frame->camera.width, frame->camera.height, pixels);
     if (Clock::now() - last_title > std::chrono::milliseconds(250) || frames > 0) {
-      window.set_title(title(scene.cameras[camera_index].name, frame.get(), view, options.sh, seconds_since(camera_changed)));
+      window.set_title(
+          title(scene.cameras[camera_index].name, frame.get(), view, options.sh, seconds_since(camera_changed)));
       last_title = Clock::now();
     }
     ++shown;
@@ -290,8 +326,8 @@ int preview(const PreviewCommandOptions& args) {
     window.wait_events(frames > 0 ? 0.0 : 1.0 / 60.0);
   }
   const double elapsed = seconds_since(start);
-  std::fprintf(stderr, "preview: first image %.3f s after launch; %d frame%s in %.2f s (%.1f frames/s)", first_image, shown,
-               shown == 1 ? "" : "s", elapsed, shown / std::max(elapsed, 1e-9));
+  std::fprintf(stderr, "preview: first image %.3f s after launch; %d frame%s in %.2f s (%.1f frames/s)", first_image,
+               shown, shown == 1 ? "" : "s", elapsed, shown / std::max(elapsed, 1e-9));
   if (frame && frame->sh_ss > 0)
     std::fprintf(stderr, "; sh %dx%d ss %d: %.1f ms an image", frame->camera.width, frame->camera.height, frame->sh_ss,
                  1e3 * frame->sh_seconds);
@@ -306,14 +342,15 @@ int preview(const PreviewCommandOptions& args) {
 
 CommandRun declare_preview(CLI::App& app) {
   auto args = std::make_shared<PreviewCommandOptions>();
-  app.description("a window that shows the render as it refines; orbit, pan, zoom, exposure, tone mapping\n"
-                  "(press H in the window for the keys)");
+  app.description(
+      "a window that shows the render as it refines; orbit, pan, zoom, exposure, tone mapping\n"
+      "(press H in the window for the keys)");
   add_scene(app, args->scene);
   add_camera(app, args->camera, "the camera to start from (default: the first)");
   add_film_resolution(app, args->resolution);
   add_integrator(app, args->integrator,
-             "shown first (default: sh for a single convex object, else path); the other follows in the\n"
-             "background (key I switches)");
+                 "shown first (default: sh for a single convex object, else path); the other follows in the\n"
+                 "background (key I switches)");
   add_lmax(app, args->lmax, "SH band limit of the sh integrator's diffuse term");
   add_supersampling(app, args->supersampling);
   add_integer(app, "--max-spp N", args->max_spp, 1, 1 << 24, "path passes stop here");

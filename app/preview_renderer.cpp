@@ -38,8 +38,8 @@ PreviewIntegrator preview_integrator(std::string_view name) {
 }
 
 PreviewRenderer::PreviewRenderer(const Scene& scene, const RayTracer& tracer, const Environment& environment,
-                                 const PathTracer& path, const PreviewRendererOptions& options, const PinholeCamera& camera,
-                                 PreviewIntegrator integrator)
+                                 const PathTracer& path, const PreviewRendererOptions& options,
+                                 const PinholeCamera& camera, PreviewIntegrator integrator)
     : scene_(scene),
       tracer_(tracer),
       environment_(environment),
@@ -105,8 +105,7 @@ void PreviewRenderer::publish(std::shared_ptr<PreviewFrame> frame) {
   const uint64_t version = frame->version, serial = frame->camera_serial;
   latest_ = std::move(frame);
   changed_.notify_all();
-  if (options_.lockstep)
-    changed_.wait(lock, [&] { return consumed_ >= version || stop_ || camera_serial_ != serial; });
+  if (options_.lockstep) changed_.wait(lock, [&] { return consumed_ >= version || stop_ || camera_serial_ != serial; });
 }
 
 void PreviewRenderer::run() {
@@ -167,8 +166,8 @@ void PreviewRenderer::render_steps() {
       published_for_camera = false;
     }
     const auto start = std::chrono::steady_clock::now();
-    const bool sh_next = wants_sh(integrator) && (integrator == PreviewIntegrator::sh || passes->spp() >= kPathFirstSpp ||
-                                                  passes->spp() >= options_.max_spp);
+    const bool sh_next = wants_sh(integrator) && (integrator == PreviewIntegrator::sh ||
+                                                  passes->spp() >= kPathFirstSpp || passes->spp() >= options_.max_spp);
     // A camera's first step is never abandoned, even when the camera has moved on by
     // the time it is done: while the mouse drags, every step would otherwise be cut
     // short and the window would show nothing new until the drag stops. It is published

@@ -44,23 +44,23 @@ PreviewIntegrator preview_integrator(std::string_view name);
 
 // One published state; immutable once published.
 struct PreviewFrame {
-  uint64_t version = 0;     // 1, 2, 3, ... in publishing order
+  uint64_t version = 0;        // 1, 2, 3, ... in publishing order
   uint64_t camera_serial = 0;  // which set_camera() it belongs to
   PinholeCamera camera;
-  Image path;               // mean of the path passes (black before the first)
+  Image path;  // mean of the path passes (black before the first)
   int path_spp = 0;
-  double path_seconds = 0;  // render time of those passes
+  double path_seconds = 0;                 // render time of those passes
   std::vector<float> path_relative_error;  // per pixel; NaN where unknown
-  Image sh;                 // empty until the first sh step
-  int sh_ss = 0;            // its K (0: none yet)
-  double sh_seconds = 0;    // render time of that sh image
-  std::vector<float> n_dot_v;  // per pixel centre; NaN where the ray misses
+  Image sh;                                // empty until the first sh step
+  int sh_ss = 0;                           // its K (0: none yet)
+  double sh_seconds = 0;                   // render time of that sh image
+  std::vector<float> n_dot_v;              // per pixel centre; NaN where the ray misses
 };
 
 struct PreviewRendererOptions {
-  ShIntegratorOptions sh;   // lmax, ss (the final K), threads
-  RenderOptions path;       // seed, threads (spp is forced to 1 per pass)
-  int max_spp = 4096;       // path passes stop here
+  ShIntegratorOptions sh;  // lmax, ss (the final K), threads
+  RenderOptions path;      // seed, threads (spp is forced to 1 per pass)
+  int max_spp = 4096;      // path passes stop here
   // Each published frame waits until wait_newer() has returned it: every step is seen,
   // in order, so that N frames always show the same image (--frames, tests).
   bool lockstep = false;
@@ -99,16 +99,16 @@ class PreviewRenderer {
   const ShIntegrator sh_;
 
   mutable std::mutex mutex_;
-  mutable std::condition_variable changed_;  // new request, or new frame, or idle
-  PinholeCamera camera_;                     // guarded by mutex_
-  uint64_t camera_serial_ = 1;               // guarded by mutex_
-  PreviewIntegrator integrator_;             // guarded by mutex_
-  bool stop_ = false;                        // guarded by mutex_
-  bool idle_ = false;                        // guarded by mutex_: nothing left to render
+  mutable std::condition_variable changed_;     // new request, or new frame, or idle
+  PinholeCamera camera_;                        // guarded by mutex_
+  uint64_t camera_serial_ = 1;                  // guarded by mutex_
+  PreviewIntegrator integrator_;                // guarded by mutex_
+  bool stop_ = false;                           // guarded by mutex_
+  bool idle_ = false;                           // guarded by mutex_: nothing left to render
   std::shared_ptr<const PreviewFrame> latest_;  // guarded by mutex_
-  mutable uint64_t consumed_ = 0;            // guarded by mutex_: newest version wait_newer() returned
-  std::exception_ptr failure_;               // guarded by mutex_: what stopped the worker
-  std::atomic<bool> cancel_{false};          // set with a new camera: abandon the pass
+  mutable uint64_t consumed_ = 0;               // guarded by mutex_: newest version wait_newer() returned
+  std::exception_ptr failure_;                  // guarded by mutex_: what stopped the worker
+  std::atomic<bool> cancel_{false};             // set with a new camera: abandon the pass
   std::thread worker_;
 };
 

@@ -86,9 +86,7 @@ void PreviewWindow::guarded(Handler&& handler) {
   }
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 namespace {
 
@@ -96,8 +94,10 @@ namespace {
 void initialise_glfw(const std::string& instead) {
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display)
-    throw Error("cannot open a window: DISPLAY is not set (no X display). Run it on a desktop, over ssh -X, or "
-                "headless under xvfb-run; without a window: " + instead);
+    throw Error(
+        "cannot open a window: DISPLAY is not set (no X display). Run it on a desktop, over ssh -X, or "
+        "headless under xvfb-run; without a window: " +
+        instead);
   if (!glfwInit())
     throw Error("cannot open a window on DISPLAY=" + std::string(display) + ": " + last_glfw_error() +
                 " (is the X server running and reachable? headless: xvfb-run)");
@@ -131,7 +131,8 @@ PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
   window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
   if (!window_) {
     const std::string reason = last_glfw_error();
-    throw Error("cannot open an OpenGL 3.3 core window: " + reason + " (the preview needs OpenGL 3.3; Mesa's llvmpipe has it)");
+    throw Error("cannot open an OpenGL 3.3 core window: " + reason +
+                " (the preview needs OpenGL 3.3; Mesa's llvmpipe has it)");
   }
   glfwMakeContextCurrent(window_);
   glfwSwapInterval(1);
@@ -149,8 +150,10 @@ PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
     for (int button : {GLFW_MOUSE_BUTTON_LEFT, GLFW_MOUSE_BUTTON_RIGHT, GLFW_MOUSE_BUTTON_MIDDLE}) {
       if (glfwGetMouseButton(w, button) == GLFW_PRESS && self.on_drag) {
         int mods = 0;
-        if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS) mods |= GLFW_MOD_SHIFT;
-        if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS) mods |= GLFW_MOD_CONTROL;
+        if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS)
+          mods |= GLFW_MOD_SHIFT;
+        if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
+          mods |= GLFW_MOD_CONTROL;
         self.guarded([&] { self.on_drag(dx, dy, button, mods); });
         break;
       }
@@ -161,7 +164,8 @@ PreviewWindow::PreviewWindow(const std::string& title, int width, int height) {
     if (self.on_scroll) self.guarded([&] { self.on_scroll(y); });
   });
 
-  const GLuint vertex = compile(GL_VERTEX_SHADER, kVertexShader), fragment = compile(GL_FRAGMENT_SHADER, kFragmentShader);
+  const GLuint vertex = compile(GL_VERTEX_SHADER, kVertexShader),
+               fragment = compile(GL_FRAGMENT_SHADER, kFragmentShader);
   program_ = glCreateProgram();
   glAttachShader(program_, vertex);
   glAttachShader(program_, fragment);
@@ -245,8 +249,10 @@ std::vector<uint8_t> PreviewWindow::read_back(int& width, int& height) const {
 void PreviewWindow::present() { glfwSwapBuffers(window_); }
 
 void PreviewWindow::wait_events(double timeout) {
-  if (timeout > 0) glfwWaitEventsTimeout(timeout);
-  else glfwPollEvents();
+  if (timeout > 0)
+    glfwWaitEventsTimeout(timeout);
+  else
+    glfwPollEvents();
   if (handler_failure_) std::rethrow_exception(std::exchange(handler_failure_, nullptr));
 }
 

@@ -115,8 +115,8 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   // relative to each transforms.json), a file is named by its absolute path.
   CaptureEnvironment environment_entry{{}, {}, job.environment_spec.options};
   const bool procedural = job.environment_spec.source.starts_with("procedural:");
-  const std::filesystem::path environment_file =
-      procedural ? std::filesystem::absolute(root / "environment.exr") : std::filesystem::absolute(job.environment_spec.source);
+  const std::filesystem::path environment_file = procedural ? std::filesystem::absolute(root / "environment.exr")
+                                                            : std::filesystem::absolute(job.environment_spec.source);
   if (procedural) {
     write_image(environment_file.string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
     environment_entry.procedural = job.environment_spec.source.substr(std::string("procedural:").size());
@@ -131,24 +131,25 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
     if (m.texture >= 0) {
       // As an absolute path when it is a file beside the scene (not embedded data), so
       // that the fit can compare its recovered texture against it.
-      const std::filesystem::path file = std::filesystem::absolute(std::filesystem::path(scene.path).parent_path() / scene.textures[m.texture].source);
+      const std::filesystem::path file =
+          std::filesystem::absolute(std::filesystem::path(scene.path).parent_path() / scene.textures[m.texture].source);
       set.material->texture = std::filesystem::exists(file) ? file.string() : scene.textures[m.texture].source;
     }
   }
   const ShIntegratorOptions& sh = job.options.sh;
-  set.renderer = job.integrator.name() == ShIntegrator::kName
-                     ? CaptureRenderer{.integrator = CaptureRenderer::Integrator::sh,
-                                       .supersampling = sh.supersampling,
-                                       .lmax = sh.lmax}
-                     : CaptureRenderer{.integrator = CaptureRenderer::Integrator::path,
-                                       .spp = job.options.path_render.spp};
+  set.renderer =
+      job.integrator.name() == ShIntegrator::kName
+          ? CaptureRenderer{.integrator = CaptureRenderer::Integrator::sh,
+                            .supersampling = sh.supersampling,
+                            .lmax = sh.lmax}
+          : CaptureRenderer{.integrator = CaptureRenderer::Integrator::path, .spp = job.options.path_render.spp};
 
   for (bool held_out : {false, true}) {
     set.frames.clear();
     const std::filesystem::path folder = held_out ? root / "holdout" : root;
-    environment_entry.file = procedural
-                                 ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
-                                 : environment_file.string();
+    environment_entry.file =
+        procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
+                   : environment_file.string();
     set.environment = environment_entry;
     for (const CameraSpec& spec : scene.cameras) {
       const bool is_holdout = std::find(holdout.begin(), holdout.end(), spec.name) != holdout.end();
@@ -191,8 +192,14 @@ int render(const RenderCommandOptions& args) {
   const IntegratorOptions integrator_options{path_options, options, sh};
   const std::unique_ptr<Integrator> renderer =
       make_integrator(args.integrator, scene, ray_tracer, environment, integrator_options);
-  const Job job{scene, spec, environment, *renderer, integrator_options, options.progress,
-                args.resolution ? std::optional(args.resolution->pair()) : std::nullopt, args.display};
+  const Job job{scene,
+                spec,
+                environment,
+                *renderer,
+                integrator_options,
+                options.progress,
+                args.resolution ? std::optional(args.resolution->pair()) : std::nullopt,
+                args.display};
 
   if (args.captures) {
     write_captures(job, *args.captures, args.holdout, environment);
@@ -202,7 +209,8 @@ int render(const RenderCommandOptions& args) {
   const std::string& out = args.out;
   if (camera_name == "all") {
     std::filesystem::create_directories(out);
-    for (const CameraSpec& camera : scene.cameras) job.render_to(camera, (std::filesystem::path(out) / (camera.name + ".exr")).string());
+    for (const CameraSpec& camera : scene.cameras)
+      job.render_to(camera, (std::filesystem::path(out) / (camera.name + ".exr")).string());
   } else {
     job.render_to(scene.camera(camera_name), out);
   }
@@ -230,7 +238,7 @@ CommandRun declare_render(CLI::App& app) {
   add_environment_override(app, args->environment);
   add_threads(app, args->threads);
   add_integrator(app, args->integrator,
-             "path: the Monte-Carlo path tracer; sh: the analytic SH shading model, no noise");
+                 "path: the Monte-Carlo path tracer; sh: the analytic SH shading model, no noise");
 
   const std::string path = "path tracer (--integrator path)", sh = "sh integrator (--integrator sh)";
   const std::vector<CLI::Option*> path_options = {

@@ -95,7 +95,8 @@ std::string signed_fixed(double value, int digits) {
 }
 std::string percent(double value) { return fixed(100 * value, 2) + "%"; }
 std::string rgb_text(const json& c, int digits) {
-  return fixed(c[0].get<double>(), digits) + " " + fixed(c[1].get<double>(), digits) + " " + fixed(c[2].get<double>(), digits);
+  return fixed(c[0].get<double>(), digits) + " " + fixed(c[1].get<double>(), digits) + " " +
+         fixed(c[2].get<double>(), digits);
 }
 RGB rgb_of(const json& c) { return RGB(c[0].get<float>(), c[1].get<float>(), c[2].get<float>()); }
 
@@ -105,7 +106,8 @@ double step(const std::string& what, Command command, const std::vector<std::str
   std::printf("\n== %s\n", what.c_str());
   std::fflush(stdout);
   const auto start = Clock::now();
-  if (const int status = command(args); status != 0) throw Error("reproduce: the step '" + what + "' failed (status " + std::to_string(status) + ")");
+  if (const int status = command(args); status != 0)
+    throw Error("reproduce: the step '" + what + "' failed (status " + std::to_string(status) + ")");
   return seconds_since(start);
 }
 
@@ -128,7 +130,8 @@ void make_spectral(const fs::path& folder, const Scene& scene, const Environment
   const Mat3 M = spectral_diffuse_matrix(m.Rd);
   const RayTracer tracer(scene);
   for (const CaptureFrame& frame : set.frames)
-    write_image(frame.file_path, render_sh_spectral(scene, tracer, environment, frame.camera, {lmax, ss, true, 0, true}, M),
+    write_image(frame.file_path,
+                render_sh_spectral(scene, tracer, environment, frame.camera, {lmax, ss, true, 0, true}, M),
                 {{"glaze:integrator", "sh (spectral camera, inverse/pseudo_brdf.h)"}});
 }
 
@@ -164,9 +167,12 @@ class Reproduction {
 
   void run() {
     fs::create_directories(s_.out / "figures");
-    results_["settings"] = {{"resolution", size_text(s_.resolution)}, {"spp", s_.spp}, {"texture_resolution", size_text(s_.texture_resolution)},
+    results_["settings"] = {{"resolution", size_text(s_.resolution)},
+                            {"spp", s_.spp},
+                            {"texture_resolution", size_text(s_.texture_resolution)},
                             {"lighting_resolution", size_text(s_.lighting_resolution)},
-                            {"transfer_lmax", s_.transfer_lmax}, {"scenes", s_.scenes.string()}};
+                            {"transfer_lmax", s_.transfer_lmax},
+                            {"scenes", s_.scenes.string()}};
     for (const Lighting& l : s_.lightings) {
       results_["lightings"].push_back({{"name", l.name}, {"env", l.env.empty() ? "the scene's" : l.env}});
       captures_and_fits(l);
@@ -176,11 +182,14 @@ class Reproduction {
     if (s_.convergence) convergence();
     write_text_atomically((s_.out / "results.json").string(), results_.dump(2) + "\n");
     report();
-    std::printf("\nwrote %s and %s\n", (s_.out / "report.md").string().c_str(), (s_.out / "results.json").string().c_str());
+    std::printf("\nwrote %s and %s\n", (s_.out / "report.md").string().c_str(),
+                (s_.out / "results.json").string().c_str());
   }
 
  private:
-  fs::path captures_dir(const Lighting& l, const std::string& object) const { return s_.out / "captures" / l.name / object; }
+  fs::path captures_dir(const Lighting& l, const std::string& object) const {
+    return s_.out / "captures" / l.name / object;
+  }
   fs::path fit_dir(const Lighting& l, const std::string& object, const std::string& mode) const {
     return s_.out / "fits" / l.name / object / mode;
   }
@@ -189,11 +198,12 @@ class Reproduction {
   void captures_and_fits(const Lighting& l) {
     for (const std::string object : {"red", "white", "textured"}) {
       const fs::path captures = captures_dir(l, object);
-      std::vector<std::string> render = {scene_file(s_, object, l), "--captures", captures.string(), "--holdout",
-                                         "novel_0,novel_1", "--spp", std::to_string(s_.spp), "--seed", s_.seed,
-                                         "--res", size_text(s_.resolution)};
+      std::vector<std::string> render = {
+          scene_file(s_, object, l), "--captures", captures.string(), "--holdout", "novel_0,novel_1",       "--spp",
+          std::to_string(s_.spp),    "--seed",     s_.seed,           "--res",     size_text(s_.resolution)};
       if (!l.env.empty()) render.insert(render.end(), {"--env", l.env});
-      time("captures/" + l.name + "/" + object, step("captures: " + object + " sphere, " + l.name, command_render, with_threads(render, s_)));
+      time("captures/" + l.name + "/" + object,
+           step("captures: " + object + " sphere, " + l.name, command_render, with_threads(render, s_)));
       const std::string transforms = (captures / "transforms.json").string();
       if (object == "textured") {
         fit(l, object, "texture", {transforms, "--mode", "texture", "--texture-res", size_text(s_.texture_resolution)});
@@ -204,10 +214,20 @@ class Reproduction {
       fit(l, object, "joint", {transforms, "--mode", "joint", "--env-res", size_text(s_.lighting_resolution)});
       // The same object seen by a spectral camera (noise-free sh captures, footprint 1).
       const fs::path spectral = captures_dir(l, object + "_spectral");
-      std::vector<std::string> sh = {scene_file(s_, object, l), "--captures", spectral.string(), "--integrator", "sh", "--ss",
-                                     "1", "--lmax", "16", "--res", size_text(s_.resolution)};
+      std::vector<std::string> sh = {scene_file(s_, object, l),
+                                     "--captures",
+                                     spectral.string(),
+                                     "--integrator",
+                                     "sh",
+                                     "--ss",
+                                     "1",
+                                     "--lmax",
+                                     "16",
+                                     "--res",
+                                     size_text(s_.resolution)};
       if (!l.env.empty()) sh.insert(sh.end(), {"--env", l.env});
-      time("captures/" + l.name + "/" + object + "_spectral", step("spectral captures: " + object + " sphere, " + l.name, command_render, with_threads(sh, s_)));
+      time("captures/" + l.name + "/" + object + "_spectral",
+           step("spectral captures: " + object + " sphere, " + l.name, command_render, with_threads(sh, s_)));
       const Scene scene = load_scene(scene_file(s_, object, l));
       make_spectral(spectral, scene, environment(l), 16, 1);
       fit(l, object + "_spectral", "material", {(spectral / "transforms.json").string(), "--mode", "material"});
@@ -217,7 +237,8 @@ class Reproduction {
   void fit(const Lighting& l, const std::string& object, const std::string& mode, std::vector<std::string> args) {
     const fs::path out = fit_dir(l, object, mode);
     args.insert(args.end(), {"--out", out.string()});
-    time("fits/" + l.name + "/" + object + "/" + mode, step(mode + " fit: " + object + " sphere, " + l.name, command_invert_fit, with_threads(args, s_)));
+    time("fits/" + l.name + "/" + object + "/" + mode,
+         step(mode + " fit: " + object + " sphere, " + l.name, command_invert_fit, with_threads(args, s_)));
     fits_[l.name][object][mode] = read_json(out / "fit.json");
   }
 
@@ -262,15 +283,19 @@ class Reproduction {
             // A fit shown in its own lighting: the RGB model's best (kept for the spectral camera only).
             if (a.name == b.name && kind == "rgb") continue;
             const json& recovered = fit_of(a, kind == "rgb" ? object : std::string(object) + "_spectral", "material");
-            Image rendered = render_sh(with_material(scene, recovered["R0"].get<float>(), rgb_of(recovered["Rd"])), tracer,
-                                       environment(b), camera, options);
+            Image rendered = render_sh(with_material(scene, recovered["R0"].get<float>(), rgb_of(recovered["Rd"])),
+                                       tracer, environment(b), camera, options);
             const AppearanceError t = appearance_error(rendered, truth, mask);
-            results_["transfer"].push_back({{"kind", kind}, {"object", object}, {"fitted_in", a.name}, {"shown_in", b.name},
+            results_["transfer"].push_back({{"kind", kind},
+                                            {"object", object},
+                                            {"fitted_in", a.name},
+                                            {"shown_in", b.name},
                                             {"relative_rmse", t.relative_rmse},
                                             {"colour_ratio", {t.colour_ratio[0], t.colour_ratio[1], t.colour_ratio[2]}},
                                             {"Rd", recovered["Rd"]}});
             if (a.name != b.name && in_figure_pair(a) && in_figure_pair(b))
-              transfer_images_[kind + "/" + object + "/" + a.name + "/" + b.name] = {t, truth, std::move(rendered), mask};
+              transfer_images_[kind + "/" + object + "/" + a.name + "/" + b.name] = {t, truth, std::move(rendered),
+                                                                                     mask};
           }
         }
     for (const char* object : kHomogeneous) {
@@ -299,22 +324,31 @@ class Reproduction {
           std::string best, most_neutral;
           double best_error = INFINITY, lowest_spread = INFINITY;
           for (const json& row : results_["transfer"]) {
-            if (row["kind"] != kind || row["object"] != object || row["shown_in"] != b.name || row["fitted_in"] == b.name) continue;
+            if (row["kind"] != kind || row["object"] != object || row["shown_in"] != b.name ||
+                row["fitted_in"] == b.name)
+              continue;
             const std::string a = row["fitted_in"];
-            if (row["relative_rmse"].get<double>() < best_error) best_error = row["relative_rmse"].get<double>(), best = a;
+            if (row["relative_rmse"].get<double>() < best_error)
+              best_error = row["relative_rmse"].get<double>(), best = a;
             if (spread[a] < lowest_spread) lowest_spread = spread[a], most_neutral = a;
           }
-          results_["transfer_ranking"].push_back({{"kind", kind}, {"object", object}, {"shown_in", b.name}, {"best_fitted_in", best},
-                                                  {"most_neutral_source", most_neutral}, {"agrees", best == most_neutral}});
+          results_["transfer_ranking"].push_back({{"kind", kind},
+                                                  {"object", object},
+                                                  {"shown_in", b.name},
+                                                  {"best_fitted_in", best},
+                                                  {"most_neutral_source", most_neutral},
+                                                  {"agrees", best == most_neutral}});
         }
     // Mean error of each lighting's fits shown in the other lightings, beside its colour.
     for (const std::string kind : {"rgb", "spectral"}) {
-      summary << " Mean error of the fits from each lighting shown in the others, " << (kind == "rgb" ? "RGB captures:" : "spectral camera:");
+      summary << " Mean error of the fits from each lighting shown in the others, "
+              << (kind == "rgb" ? "RGB captures:" : "spectral camera:");
       for (const Lighting& a : s_.lightings) {
         double sum = 0.0;
         int count = 0;
         for (const json& row : results_["transfer"])
-          if (row["kind"] == kind && row["fitted_in"] == a.name && row["shown_in"] != a.name) sum += row["relative_rmse"].get<double>(), ++count;
+          if (row["kind"] == kind && row["fitted_in"] == a.name && row["shown_in"] != a.name)
+            sum += row["relative_rmse"].get<double>(), ++count;
         if (count == 0) continue;
         results_["transfer_mean"][kind][a.name] = sum / count;
         summary << " " << a.name << " " << percent(sum / count);
@@ -326,11 +360,12 @@ class Reproduction {
     if (s_.lightings.size() >= 3)
       for (const std::string kind : {"rgb", "spectral"}) {
         std::vector<std::pair<double, double>> pairs;
-        for (const Lighting& l : s_.lightings) pairs.push_back({spread[l.name], results_["transfer_mean"][kind][l.name].get<double>()});
+        for (const Lighting& l : s_.lightings)
+          pairs.push_back({spread[l.name], results_["transfer_mean"][kind][l.name].get<double>()});
         const double rho = rank_correlation(pairs);
         results_["transfer_rank_correlation"][kind] = rho;
-        summary << " Rank correlation of colour spread with that error, " << (kind == "rgb" ? "RGB captures: " : "spectral camera: ")
-                << fixed(rho, 2) << ".";
+        summary << " Rank correlation of colour spread with that error, "
+                << (kind == "rgb" ? "RGB captures: " : "spectral camera: ") << fixed(rho, 2) << ".";
       }
     if (results_.contains("transfer_ranking")) {
       for (const std::string kind : {"rgb", "spectral"}) {
@@ -338,10 +373,12 @@ class Reproduction {
         for (const json& row : results_["transfer_ranking"])
           if (row["kind"] == kind) agree += row["agrees"].get<bool>(), ++total;
         summary << " " << (kind == "rgb" ? "RGB captures" : "Spectral camera") << ": in " << agree << " of " << total
-                << " (sphere, lighting shown in) pairs the material fitted in the most neutral of the other lightings renders best.";
+                << " (sphere, lighting shown in) pairs the material fitted in the most neutral of the other lightings "
+                   "renders best.";
       }
     } else {
-      summary << " (Whether fits from white-ish light transfer best needs three or more lightings to rank; run with the real maps.)";
+      summary << " (Whether fits from white-ish light transfer best needs three or more lightings to rank; run with "
+                 "the real maps.)";
     }
     results_["transfer_summary"] = summary.str();
   }
@@ -359,32 +396,48 @@ class Reproduction {
       for (const char* object : kHomogeneous) {
         const json& r = fit_of(l, object, "material");
         const json& truth = r["reference_material"];
-        json row = {{"lighting", l.name}, {"object", object}, {"true_R0", truth["R0"]}, {"true_Rd", truth["Rd"]}, {"R0", r["R0"]}, {"Rd", r["Rd"]},
-                    {"R0_error", r["R0"].get<double>() - truth["R0"].get<double>()}, {"seconds", r["seconds"]}, {"samples", r["samples"]}};
+        json row = {{"lighting", l.name},
+                    {"object", object},
+                    {"true_R0", truth["R0"]},
+                    {"true_Rd", truth["Rd"]},
+                    {"R0", r["R0"]},
+                    {"Rd", r["Rd"]},
+                    {"R0_error", r["R0"].get<double>() - truth["R0"].get<double>()},
+                    {"seconds", r["seconds"]},
+                    {"samples", r["samples"]}};
         for (int c = 0; c < 3; ++c) row["Rd_error"].push_back(r["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
         results_["table2"].push_back(row);
       }
       const json& t = fit_of(l, "textured", "texture");
-      results_["table2"].push_back({{"lighting", l.name}, {"object", "textured"}, {"true_R0", t["reference_material"]["R0"]}, {"R0", t["R0"]},
+      results_["table2"].push_back({{"lighting", l.name},
+                                    {"object", "textured"},
+                                    {"true_R0", t["reference_material"]["R0"]},
+                                    {"R0", t["R0"]},
                                     {"R0_error", t["R0"].get<double>() - t["reference_material"]["R0"].get<double>()},
-                                    {"texture_rmse", t.value("texture_rmse", json())}, {"coverage", t["coverage"]},
-                                    {"seconds", t["seconds"]}, {"samples", t["samples"]}});
+                                    {"texture_rmse", t.value("texture_rmse", json())},
+                                    {"coverage", t["coverage"]},
+                                    {"seconds", t["seconds"]},
+                                    {"samples", t["samples"]}});
     }
   }
 
   void figure_5() {
-    Figure figure{"Figure 5: diffuse textures recovered under known lighting (magenta/grey checks: unknown texels)", {}, {}};
+    Figure figure{
+        "Figure 5: diffuse textures recovered under known lighting (magenta/grey checks: unknown texels)", {}, {}};
     const Scene scene = load_scene(scene_file(s_, "textured", s_.lightings.front()));
     const Image truth = scene.textures.at(0).image;
     const DisplaySettings display{0.0f, ToneMapping::clamp};  // albedo in [0, 1]: shown as it is
     for (const Lighting& l : s_.lightings) {
       const json& t = fit_of(l, "textured", "texture");
       figure.row_labels.push_back(l.name);
-      figure.rows.push_back({picture_panel(truth, display, "true albedo", 384),
-                             picture_panel(texture_with_unknown(t["texture"].get<std::string>()), display,
-                                           "recovered: texel RMSE " + (t["texture_rmse"].is_number() ? fixed(t["texture_rmse"].get<double>(), 4) : "n/a") +
-                                               "\nknown " + percent(t["coverage"].get<double>()) + ", R0 " + fixed(t["R0"].get<double>(), 4),
-                                           384)});
+      figure.rows.push_back(
+          {picture_panel(truth, display, "true albedo", 384),
+           picture_panel(texture_with_unknown(t["texture"].get<std::string>()), display,
+                         "recovered: texel RMSE " +
+                             (t["texture_rmse"].is_number() ? fixed(t["texture_rmse"].get<double>(), 4) : "n/a") +
+                             "\nknown " + percent(t["coverage"].get<double>()) + ", R0 " +
+                             fixed(t["R0"].get<double>(), 4),
+                         384)});
     }
     write_figure((s_.out / "figures" / "figure5_textures.png").string(), figure);
   }
@@ -399,9 +452,13 @@ class Reproduction {
           const Image rendered = read_image(view["render"].get<std::string>());
           const DisplaySettings display{exposure_for(captured), ToneMapping::filmic};
           const double error = view["relative_rmse"].is_number() ? view["relative_rmse"].get<double>() : NAN;
-          results_["holdout"].push_back({{"lighting", l.name}, {"object", object}, {"camera", view["camera"]}, {"relative_rmse", view["relative_rmse"]}});
+          results_["holdout"].push_back({{"lighting", l.name},
+                                         {"object", object},
+                                         {"camera", view["camera"]},
+                                         {"relative_rmse", view["relative_rmse"]}});
           figure.row_labels.push_back(l.name + "\n" + object + " sphere\n" + view["camera"].get<std::string>());
-          figure.rows.push_back({picture_panel(captured, display, "held-out capture"), picture_panel(rendered, display, "recovered material"),
+          figure.rows.push_back({picture_panel(captured, display, "held-out capture"),
+                                 picture_panel(rendered, display, "recovered material"),
                                  error_panel(rendered, captured, object_pixels(captured), 0.2f,
                                              "|difference| (0 to 20% of mean)\nrelative RMSE " + percent(error))});
         }
@@ -419,22 +476,26 @@ class Reproduction {
             const TransferImages& t = transfer_images_.at(kind + "/" + object + "/" + a.name + "/" + b.name);
             const DisplaySettings display{exposure_for(t.truth), ToneMapping::filmic};
             char ratio[96];
-            std::snprintf(ratio, sizeof ratio, "colour ratio %.3f %.3f %.3f", t.numbers.colour_ratio[0], t.numbers.colour_ratio[1],
-                          t.numbers.colour_ratio[2]);
-            figure.row_labels.push_back(std::string(kind == "rgb" ? "RGB captures" : "spectral camera") + "\n" + object +
-                                        " sphere\nfitted in " + a.name + "\nshown in " + b.name);
-            figure.rows.push_back({picture_panel(t.truth, display, "true appearance in " + b.name),
-                                   picture_panel(t.rendered, display, "recovered in " + a.name + "\n" + ratio),
-                                   error_panel(t.rendered, t.truth, t.mask, 0.2f, "|difference| (0 to 20% of mean)\nrelative RMSE " + percent(t.numbers.relative_rmse))});
+            std::snprintf(ratio, sizeof ratio, "colour ratio %.3f %.3f %.3f", t.numbers.colour_ratio[0],
+                          t.numbers.colour_ratio[1], t.numbers.colour_ratio[2]);
+            figure.row_labels.push_back(std::string(kind == "rgb" ? "RGB captures" : "spectral camera") + "\n" +
+                                        object + " sphere\nfitted in " + a.name + "\nshown in " + b.name);
+            figure.rows.push_back(
+                {picture_panel(t.truth, display, "true appearance in " + b.name),
+                 picture_panel(t.rendered, display, "recovered in " + a.name + "\n" + ratio),
+                 error_panel(t.rendered, t.truth, t.mask, 0.2f,
+                             "|difference| (0 to 20% of mean)\nrelative RMSE " + percent(t.numbers.relative_rmse))});
           }
     write_figure((s_.out / "figures" / "figure7_transfer.png").string(), figure);
   }
 
   void figure_8_and_9() {
     for (const std::string mode : {"lighting", "joint"}) {
-      Figure figure{mode == "lighting" ? "Figure 8: lighting recovered from spheres of known material (" + size_text(s_.lighting_resolution) + "; coverage: white = seen)"
+      Figure figure{mode == "lighting" ? "Figure 8: lighting recovered from spheres of known material (" +
+                                             size_text(s_.lighting_resolution) + "; coverage: white = seen)"
                                        : "Figure 9: lighting and material recovered together (joint)",
-                    {}, {}};
+                    {},
+                    {}};
       for (const Lighting& l : s_.lightings) {
         const Environment& truth = environment(l);
         // map() is before the scale, the recovered maps after it: one exposure for both.
@@ -444,27 +505,35 @@ class Reproduction {
         for (const char* object : kHomogeneous) {
           const json& r = fit_of(l, object, mode);
           const json& map_error = r["reference_map_error"]["64x32"]["relative_rmse"];
-          std::string caption = std::string(object) + ": L_lm (l<=2) error " + percent(r["reference_L_lm_error_l2"].get<double>()) +
-                                "\nmap error (64x32) " + (map_error.is_number() ? percent(map_error.get<double>()) : "n/a") +
-                                ", covered " + percent(r["covered_fraction"].get<double>());
+          std::string caption = std::string(object) + ": L_lm (l<=2) error " +
+                                percent(r["reference_L_lm_error_l2"].get<double>()) + "\nmap error (64x32) " +
+                                (map_error.is_number() ? percent(map_error.get<double>()) : "n/a") + ", covered " +
+                                percent(r["covered_fraction"].get<double>());
           if (mode == "joint")
-            caption += "\nR0 " + fixed(r["R0"].get<double>(), 4) + ", Rd " + rgb_text(r["Rd"], 3) + "\nscale " + rgb_text(r["reference_scale"], 3);
+            caption += "\nR0 " + fixed(r["R0"].get<double>(), 4) + ", Rd " + rgb_text(r["Rd"], 3) + "\nscale " +
+                       rgb_text(r["reference_scale"], 3);
           row.push_back(picture_panel(read_image(r["map"].get<std::string>()), display, caption));
           if (mode == "lighting")
-            row.push_back(picture_panel(read_image(r["coverage_mask"].get<std::string>()), {0.0f, ToneMapping::clamp}, std::string(object) + ": coverage"));
+            row.push_back(picture_panel(read_image(r["coverage_mask"].get<std::string>()), {0.0f, ToneMapping::clamp},
+                                        std::string(object) + ": coverage"));
           results_[mode == "lighting" ? "lighting" : "table3"].push_back(table_row(l, object, mode));
         }
         figure.row_labels.push_back(l.name);
         figure.rows.push_back(std::move(row));
       }
-      write_figure((s_.out / "figures" / (mode == "lighting" ? "figure8_lighting.png" : "figure9_joint.png")).string(), figure);
+      write_figure((s_.out / "figures" / (mode == "lighting" ? "figure8_lighting.png" : "figure9_joint.png")).string(),
+                   figure);
     }
   }
 
   json table_row(const Lighting& l, const std::string& object, const std::string& mode) const {
     const json& r = fit_of(l, object, mode);
-    json row = {{"lighting", l.name}, {"object", object}, {"L_lm_error_l2", r["reference_L_lm_error_l2"]},
-                {"map_error", r["reference_map_error"]}, {"covered_fraction", r["covered_fraction"]}, {"seconds", r["seconds"]},
+    json row = {{"lighting", l.name},
+                {"object", object},
+                {"L_lm_error_l2", r["reference_L_lm_error_l2"]},
+                {"map_error", r["reference_map_error"]},
+                {"covered_fraction", r["covered_fraction"]},
+                {"seconds", r["seconds"]},
                 {"scale", r["reference_scale"]}};
     if (mode == "joint") {
       const json& known = fit_of(l, object, "material");
@@ -484,10 +553,12 @@ class Reproduction {
 
   void convergence() {
     const Lighting office{"office", "office", ""};
-    time("convergence", step("error against run time: red sphere, office", command_convergence,
-                             with_threads({scene_file(s_, "red", office), "--camera", "view_0", "--res", size_text(s_.convergence_resolution), "--ref-spp",
-                                           std::to_string(s_.convergence_ref_spp), "--out", (s_.out / "convergence").string()},
-                                          s_)));
+    time("convergence",
+         step("error against run time: red sphere, office", command_convergence,
+              with_threads(
+                  {scene_file(s_, "red", office), "--camera", "view_0", "--res", size_text(s_.convergence_resolution),
+                   "--ref-spp", std::to_string(s_.convergence_ref_spp), "--out", (s_.out / "convergence").string()},
+                  s_)));
     results_["convergence"] = read_json(s_.out / "convergence" / "summary.json");
   }
 
@@ -506,84 +577,111 @@ void Reproduction::report() const {
   md << "# glaze reproduce: Nielsen and Brodersen 2004, end to end\n\n"
      << "Captures: glaze's path tracer, " << size_text(s_.resolution) << " pixels, " << s_.spp
      << " spp, three input views and two held-out views per sphere (scenes/). Lightings:";
-  for (const Lighting& l : s_.lightings) md << " " << l.name << (l.env.empty() ? "" : " (" + fs::path(l.env).filename().string() + ")") << ",";
+  for (const Lighting& l : s_.lightings)
+    md << " " << l.name << (l.env.empty() ? "" : " (" + fs::path(l.env).filename().string() + ")") << ",";
   md.seekp(-1, std::ios_base::end);
-  md << ". Every number below is in `results.json`; every fit's own output (fit.json, solver report, re-renders, residual images) is under `fits/`.\n\n";
+  md << ". Every number below is in `results.json`; every fit's own output (fit.json, solver report, re-renders, "
+        "residual images) is under `fits/`.\n\n";
 
-  md << "## Table 2: material under known lighting\n\n| lighting | sphere | true R0 | R0 | error | true Rd | Rd | error | fit time |\n|---|---|---|---|---|---|---|---|---|\n";
+  md << "## Table 2: material under known lighting\n\n| lighting | sphere | true R0 | R0 | error | true Rd | Rd | "
+        "error | fit time |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const json& row : r["table2"]) {
-    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << fixed(row["true_R0"].get<double>(), 4)
-       << " | " << fixed(row["R0"].get<double>(), 4) << " | " << signed_fixed(row["R0_error"].get<double>(), 4) << " | ";
+    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | "
+       << fixed(row["true_R0"].get<double>(), 4) << " | " << fixed(row["R0"].get<double>(), 4) << " | "
+       << signed_fixed(row["R0_error"].get<double>(), 4) << " | ";
     if (row.contains("Rd"))
-      md << rgb_text(row["true_Rd"], 4) << " | " << rgb_text(row["Rd"], 4) << " | " << signed_fixed(row["Rd_error"][0].get<double>(), 4) << " "
-         << signed_fixed(row["Rd_error"][1].get<double>(), 4) << " " << signed_fixed(row["Rd_error"][2].get<double>(), 4);
+      md << rgb_text(row["true_Rd"], 4) << " | " << rgb_text(row["Rd"], 4) << " | "
+         << signed_fixed(row["Rd_error"][0].get<double>(), 4) << " "
+         << signed_fixed(row["Rd_error"][1].get<double>(), 4) << " "
+         << signed_fixed(row["Rd_error"][2].get<double>(), 4);
     else
-      md << "texture | texture | texel RMSE " << (row["texture_rmse"].is_number() ? fixed(row["texture_rmse"].get<double>(), 4) : "n/a")
-         << ", " << percent(row["coverage"].get<double>()) << " known";
+      md << "texture | texture | texel RMSE "
+         << (row["texture_rmse"].is_number() ? fixed(row["texture_rmse"].get<double>(), 4) : "n/a") << ", "
+         << percent(row["coverage"].get<double>()) << " known";
     md << " | " << fixed(row["seconds"].get<double>(), 2) << " s |\n";
   }
   md << "\n## Figure 5: recovered diffuse textures\n\n![Figure 5](figures/figure5_textures.png)\n\n";
   md << "## Figure 6: held-out views\n\n| lighting | sphere | view | relative RMSE |\n|---|---|---|---|\n";
   for (const json& row : r["holdout"])
-    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << row["camera"].get<std::string>() << " | "
+    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | "
+       << row["camera"].get<std::string>() << " | "
        << (row["relative_rmse"].is_number() ? percent(row["relative_rmse"].get<double>()) : "n/a") << " |\n";
   md << "\nThe held-out captures carry the path tracer's noise at " << s_.spp
-     << " spp; the re-renders (sh integrator) have none, so for the homogeneous spheres these errors are mostly that noise. "
-        "The textured sphere's held-out views look at its poles, which no input view saw well: those texels are unknown "
+     << " spp; the re-renders (sh integrator) have none, so for the homogeneous spheres these errors are mostly that "
+        "noise. "
+        "The textured sphere's held-out views look at its poles, which no input view saw well: those texels are "
+        "unknown "
         "(Figure 5) and render black, which is most of its error.\n\n![Figure 6](figures/figure6_novel_views.png)\n\n";
 
   md << "## Figure 7: recovered materials in other lighting\n\n"
-        "Each material recovered in one lighting is rendered (view_0, sh integrator) in another and compared with its true "
-        "appearance there. *RGB captures*: the path-traced captures above, which, like glaze, render per RGB channel, so a "
-        "material transfers up to its fitting error. *Spectral camera*: noise-free captures of a camera that integrates "
+        "Each material recovered in one lighting is rendered (view_0, sh integrator) in another and compared with its "
+        "true "
+        "appearance there. *RGB captures*: the path-traced captures above, which, like glaze, render per RGB channel, "
+        "so a "
+        "material transfers up to its fitting error. *Spectral camera*: noise-free captures of a camera that "
+        "integrates "
         "31 wavelengths (inverse/pseudo_brdf.h); an RGB fit then finds a pseudo-BRDF that depends on the light it was "
         "fitted under, which is the colour shift the paper reports. Colour ratio: mean rendered over mean true, "
         "per channel.\n\n"
-        "| captures | sphere | fitted in | shown in | relative RMSE | colour ratio (r g b) |\n|---|---|---|---|---|---|\n";
+        "| captures | sphere | fitted in | shown in | relative RMSE | colour ratio (r g b) "
+        "|\n|---|---|---|---|---|---|\n";
   for (const json& row : r["transfer"])
-    md << "| " << row["kind"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << row["fitted_in"].get<std::string>() << " | "
-       << row["shown_in"].get<std::string>() << " | " << percent(row["relative_rmse"].get<double>()) << " | " << rgb_text(row["colour_ratio"], 3) << " |\n";
-  md << "\n" << r["transfer_summary"].get<std::string>() << "\n\nThe spectral camera's diffuse response M (camera RGB = M x RGB irradiance; "
+    md << "| " << row["kind"].get<std::string>() << " | " << row["object"].get<std::string>() << " | "
+       << row["fitted_in"].get<std::string>() << " | " << row["shown_in"].get<std::string>() << " | "
+       << percent(row["relative_rmse"].get<double>()) << " | " << rgb_text(row["colour_ratio"], 3) << " |\n";
+  md << "\n"
+     << r["transfer_summary"].get<std::string>()
+     << "\n\nThe spectral camera's diffuse response M (camera RGB = M x RGB irradiance; "
         "an RGB fit can only find its diagonal):";
   for (const auto& [object, M] : r["spectral_matrix"].items())
     md << " " << object << " [" << rgb_text(M[0], 3) << "; " << rgb_text(M[1], 3) << "; " << rgb_text(M[2], 3) << "]";
   md << ".\n\n![Figure 7](figures/figure7_transfer.png)\n\n";
 
-  md << "## Figure 8: lighting from spheres of known material\n\n| lighting | sphere | L_lm error (l<=2, of L00) | map error 64x32 | 128x64 | 256x128 | covered | time |\n|---|---|---|---|---|---|---|---|\n";
+  md << "## Figure 8: lighting from spheres of known material\n\n| lighting | sphere | L_lm error (l<=2, of L00) | map "
+        "error 64x32 | 128x64 | 256x128 | covered | time |\n|---|---|---|---|---|---|---|---|\n";
   auto map_error = [](const json& row, const char* key) {
     if (!row["map_error"].contains(key)) return std::string("-");  // finer than the recovered map
     const json& error = row["map_error"][key]["relative_rmse"];
     return error.is_number() ? percent(error.get<double>()) : std::string("n/a (no cell wholly covered)");
   };
   for (const json& row : r["lighting"])
-    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << percent(row["L_lm_error_l2"].get<double>())
-       << " | " << map_error(row, "64x32") << " | " << map_error(row, "128x64") << " | " << map_error(row, "256x128") << " | "
+    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | "
+       << percent(row["L_lm_error_l2"].get<double>()) << " | " << map_error(row, "64x32") << " | "
+       << map_error(row, "128x64") << " | " << map_error(row, "256x128") << " | "
        << percent(row["covered_fraction"].get<double>()) << " | " << fixed(row["seconds"].get<double>(), 2) << " s |\n";
   md << "\n![Figure 8](figures/figure8_lighting.png)\n\n";
 
   md << "## Figure 9 and Table 3: joint estimation against known lighting\n\n"
-        "| lighting | sphere | true R0 | known-lighting R0 | joint R0 | true Rd | known-lighting Rd | joint Rd | joint - known Rd | scale (recovered/true L00) | time |\n"
+        "| lighting | sphere | true R0 | known-lighting R0 | joint R0 | true Rd | known-lighting Rd | joint Rd | joint "
+        "- known Rd | scale (recovered/true L00) | time |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const json& row : r["table3"])
-    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | " << fixed(row["true"]["R0"].get<double>(), 4)
-       << " | " << fixed(row["known_lighting"]["R0"].get<double>(), 4) << " | " << fixed(row["joint"]["R0"].get<double>(), 4) << " | "
-       << rgb_text(row["true"]["Rd"], 4) << " | " << rgb_text(row["known_lighting"]["Rd"], 4) << " | " << rgb_text(row["joint"]["Rd"], 4) << " | "
-       << signed_fixed(row["joint_minus_known_Rd"][0].get<double>(), 4) << " " << signed_fixed(row["joint_minus_known_Rd"][1].get<double>(), 4) << " "
+    md << "| " << row["lighting"].get<std::string>() << " | " << row["object"].get<std::string>() << " | "
+       << fixed(row["true"]["R0"].get<double>(), 4) << " | " << fixed(row["known_lighting"]["R0"].get<double>(), 4)
+       << " | " << fixed(row["joint"]["R0"].get<double>(), 4) << " | " << rgb_text(row["true"]["Rd"], 4) << " | "
+       << rgb_text(row["known_lighting"]["Rd"], 4) << " | " << rgb_text(row["joint"]["Rd"], 4) << " | "
+       << signed_fixed(row["joint_minus_known_Rd"][0].get<double>(), 4) << " "
+       << signed_fixed(row["joint_minus_known_Rd"][1].get<double>(), 4) << " "
        << signed_fixed(row["joint_minus_known_Rd"][2].get<double>(), 4) << " | " << rgb_text(row["scale"], 3) << " | "
        << fixed(row["seconds"].get<double>(), 1) << " s |\n";
-  md << "\nThe paper's Table 3 shows shifts of about 0.02 between known-lighting and joint estimates.\n\n![Figure 9](figures/figure9_joint.png)\n\n";
+  md << "\nThe paper's Table 3 shows shifts of about 0.02 between known-lighting and joint estimates.\n\n![Figure "
+        "9](figures/figure9_joint.png)\n\n";
 
   if (r.contains("convergence")) {
-    md << "## Error against run time (sh integrator against the path tracer)\n\nRed sphere, office, view_0 at " << size_text(s_.convergence_resolution)
-       << ", reference " << s_.convergence_ref_spp << " spp (`glaze convergence`).\n\n";
+    md << "## Error against run time (sh integrator against the path tracer)\n\nRed sphere, office, view_0 at "
+       << size_text(s_.convergence_resolution) << ", reference " << s_.convergence_ref_spp
+       << " spp (`glaze convergence`).\n\n";
     for (const auto& [target, entry] : r["convergence"]["time_to"].items()) {
       md << "- relative RMSE " << percent(std::stod(target)) << ": ";
-      if (entry.contains("resolvable") && !entry["resolvable"].get<bool>()) md << "not resolvable at this reference's noise\n";
+      if (entry.contains("resolvable") && !entry["resolvable"].get<bool>())
+        md << "not resolvable at this reference's noise\n";
       else if (entry["sh_seconds"].is_number())
-        md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, sh " << fixed(entry["sh_seconds"].get<double>(), 4) << " s ("
-           << entry["sh_setting"].get<std::string>() << "): " << fixed(entry["speedup"].get<double>(), 0) << "x, "
+        md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, sh "
+           << fixed(entry["sh_seconds"].get<double>(), 4) << " s (" << entry["sh_setting"].get<std::string>()
+           << "): " << fixed(entry["speedup"].get<double>(), 0) << "x, "
            << fixed(entry["speedup_projection_cached"].get<double>(), 0) << "x with the SH projection cached\n";
-      else md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, no sh setting reaches it\n";
+      else
+        md << "path tracer " << fixed(entry["path_seconds"].get<double>(), 3) << " s, no sh setting reaches it\n";
     }
     md << "\n![error against run time](convergence/convergence.png)\n\n";
   }
@@ -623,7 +721,8 @@ int reproduce(const ReproduceCommandOptions& args) {
   const bool here = fs::exists("scenes/red_sphere_office.gltf");
   s.scenes = args.scenes.value_or(here ? "scenes" : std::string(GLAZE_SOURCE_DIR) + "/scenes");
   if (!fs::exists(s.scenes / "red_sphere_office.gltf"))
-    throw Error(s.scenes.string() + ": no scenes/red_sphere_office.gltf there; give glaze's scenes folder with --scenes DIR");
+    throw Error(s.scenes.string() +
+                ": no scenes/red_sphere_office.gltf there; give glaze's scenes folder with --scenes DIR");
   auto size = [](const std::optional<Resolution>& given, Size otherwise) { return given ? given->pair() : otherwise; };
   s.resolution = size(args.resolution, quick ? Size(160, 160) : Size(512, 512));
   s.spp = args.spp;
@@ -638,7 +737,8 @@ int reproduce(const ReproduceCommandOptions& args) {
   s.convergence_resolution = quick ? Size(32, 32) : Size(128, 128);
 
   // Lightings: the paper's two, and real maps when present.
-  const std::map<std::string, Lighting> procedural = {{"office", {"office", "office", ""}}, {"blue-room", {"blue-room", "blue_room", ""}}};
+  const std::map<std::string, Lighting> procedural = {{"office", {"office", "office", ""}},
+                                                      {"blue-room", {"blue-room", "blue_room", ""}}};
   const fs::path envmaps = default_data_dir() / "envmaps";
   std::vector<std::string> names;
   if (args.lighting) {
@@ -646,15 +746,23 @@ int reproduce(const ReproduceCommandOptions& args) {
   } else {
     names = {"office", "blue-room"};
     for (const std::string& name : args.real_maps) {
-      if (fs::exists(envmaps / name)) names.push_back(name);
-      else std::printf("reproduce: %s not found under %s (set GLAZE_DATA_DIR): its experiments are skipped\n", name.c_str(), envmaps.string().c_str());
+      if (fs::exists(envmaps / name))
+        names.push_back(name);
+      else
+        std::printf("reproduce: %s not found under %s (set GLAZE_DATA_DIR): its experiments are skipped\n",
+                    name.c_str(), envmaps.string().c_str());
     }
   }
   for (const std::string& name : names) {
-    if (procedural.count(name)) s.lightings.push_back(procedural.at(name));
-    else if (fs::exists(name)) s.lightings.push_back({fs::path(name).stem().string(), "office", fs::absolute(name).string()});
-    else if (fs::exists(envmaps / name)) s.lightings.push_back({fs::path(name).stem().string(), "office", (envmaps / name).string()});
-    else throw Error("--lighting: '" + name + "' is neither office, blue-room, an image file nor a map under " + envmaps.string());
+    if (procedural.count(name))
+      s.lightings.push_back(procedural.at(name));
+    else if (fs::exists(name))
+      s.lightings.push_back({fs::path(name).stem().string(), "office", fs::absolute(name).string()});
+    else if (fs::exists(envmaps / name))
+      s.lightings.push_back({fs::path(name).stem().string(), "office", (envmaps / name).string()});
+    else
+      throw Error("--lighting: '" + name + "' is neither office, blue-room, an image file nor a map under " +
+                  envmaps.string());
   }
   if (s.lightings.empty()) throw Error("--lighting: no lighting given");
   Reproduction(std::move(s)).run();
@@ -684,8 +792,9 @@ CommandRun declare_reproduce(CLI::App& app) {
   add_text(app, "--scenes DIR", args->scenes, "glaze's scenes folder (default ./scenes, else the source tree's)");
   app.add_flag("--no-convergence", args->no_convergence, "leave out the error-against-run-time study");
   add_threads(app, args->threads);
-  app.footer("Writes DIR/report.md (tables and figures side by side), DIR/results.json (every number),\n"
-             "DIR/figures/*.png, and the captures and fits behind them.");
+  app.footer(
+      "Writes DIR/report.md (tables and figures side by side), DIR/results.json (every number),\n"
+      "DIR/figures/*.png, and the captures and fits behind them.");
   return [args] { return reproduce(*args); };
 }
 

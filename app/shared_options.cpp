@@ -53,7 +53,8 @@ EnvironmentSpec environment_spec(const Scene& scene, const EnvironmentOverride& 
   } else if (scene.environment) {
     spec = *scene.environment;
   } else {
-    throw Error(scene.path + ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or "
+    throw Error(scene.path +
+                ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or "
                 "--env procedural:office");
   }
   spec.options.scale = environment.scale.value_or(spec.options.scale);

@@ -8,6 +8,8 @@ namespace glaze {
 using Clock = std::chrono::steady_clock;
 
 // Seconds elapsed since `start`.
-inline double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+inline double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 }  // namespace glaze

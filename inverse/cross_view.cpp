@@ -53,7 +53,8 @@ class ReflectedMesh {
       const int row_low = std::max(0, int(std::floor(v_low * kRows - 0.5f)));
       const int row_high = std::min(kRows - 1, int(std::floor(v_high * kRows + 0.5f)));
       const bool whole_rows = u_high - u_low > 0.25f || row_low == 0 || row_high == kRows - 1;
-      const int column_low = int(std::floor(u_low * kColumns - 0.5f)), column_high = int(std::floor(u_high * kColumns + 0.5f));
+      const int column_low = int(std::floor(u_low * kColumns - 0.5f)),
+                column_high = int(std::floor(u_high * kColumns + 0.5f));
       for (int row = row_low; row <= row_high; ++row) {
         if (whole_rows) {
           for (int column = 0; column < kColumns; ++column) entries.emplace_back(row * kColumns + column, t);
@@ -75,7 +76,8 @@ class ReflectedMesh {
 
   // The triangle whose directions contain `r`, and r's barycentric weights in it (the
   // central projection onto its plane); false when no triangle of this view does.
-  bool locate(const Vec3& r, std::array<uint32_t, 3>& corners, std::array<float, 3>& weights, double* area = nullptr) const {
+  bool locate(const Vec3& r, std::array<uint32_t, 3>& corners, std::array<float, 3>& weights,
+              double* area = nullptr) const {
     const Vec2 uv = direction_to_latlong(r);
     const int cell = texel_of(uv, kColumns, kRows);
     for (uint32_t i = start_[cell]; i < start_[cell + 1]; ++i) {
@@ -121,7 +123,8 @@ CrossViewSystem::~CrossViewSystem() = default;
 
 CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samples, bool trim)
     : data_(data), n_(int(data.cc.rows())), trim_(trim) {
-  if (!samples.pixels) throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
+  if (!samples.pixels)
+    throw Error("the joint fit compares views on their pixel grids: use pixel samples (drop --points)");
   const size_t count = samples.samples.size();
   if (data.noise.size() != count) throw Error("the views' comparison needs the captures' noise model (estimate_noise)");
   const int views = int(samples.per_frame.size());
@@ -138,9 +141,12 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
     for (int axis = 0; axis < 2; ++axis) {
       const int64_t plus = grid.sample_at(i + (axis == 0), j + (axis == 1));
       const int64_t minus = grid.sample_at(i - (axis == 0), j - (axis == 1));
-      if (plus >= 0 && minus >= 0) steps[k][axis] = 0.5f * (data.reflected[plus] - data.reflected[minus]);
-      else if (plus >= 0) steps[k][axis] = data.reflected[plus] - data.reflected[k];
-      else if (minus >= 0) steps[k][axis] = data.reflected[k] - data.reflected[minus];
+      if (plus >= 0 && minus >= 0)
+        steps[k][axis] = 0.5f * (data.reflected[plus] - data.reflected[minus]);
+      else if (plus >= 0)
+        steps[k][axis] = data.reflected[plus] - data.reflected[k];
+      else if (minus >= 0)
+        steps[k][axis] = data.reflected[k] - data.reflected[minus];
     }
   });
   // Per sample, its pairs with every other view, found in parallel a block of samples at
@@ -172,8 +178,9 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
       }
   }
   if (pairs_.empty())
-    throw Error("no direction is reflected towards two views: material and lighting cannot be separated; the joint "
-                "fit needs views from several directions");
+    throw Error(
+        "no direction is reflected towards two views: material and lighting cannot be separated; the joint "
+        "fit needs views from several directions");
 }
 
 void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
@@ -184,7 +191,8 @@ void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const
   // R0 is: the header says why), and where that fails 3 x 3.
   const int nearest = int(std::max_element(s.weight.begin(), s.weight.begin() + 3) - s.weight.begin());
   const uint32_t corner = s.member[nearest];
-  if (average_noise && data_.mu[corner] > data_.mu[sample] && quadratic_weights(mesh, samples, steps, sample, corner, 2, s))
+  if (average_noise && data_.mu[corner] > data_.mu[sample] &&
+      quadratic_weights(mesh, samples, steps, sample, corner, 2, s))
     return;
   quadratic_weights(mesh, samples, steps, sample, corner, 1, s);
 }
@@ -199,7 +207,8 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
   int n = 0;
   for (int dj = -reach; dj <= reach; ++dj)
     for (int di = -reach; di <= reach; ++di)
-      if (const int64_t k = mesh.pixels().sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0) members[n++] = uint32_t(k);
+      if (const int64_t k = mesh.pixels().sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0)
+        members[n++] = uint32_t(k);
   if (n < (2 * reach + 1) * (2 * reach + 1) - 1) return false;
   // Coordinates on the plane tangent at r (the central projection, as the triangles'
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
@@ -249,7 +258,8 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
   if (reach > 1) {
     Eigen::Matrix<double, Eigen::Dynamic, 3> records(n, 3);
     for (int m = 0; m < n; ++m) records.row(m) = data_.observed[members[m]].cast<double>().matrix().transpose();
-    const Eigen::Matrix<double, Eigen::Dynamic, 3> misfit = records - scaled * normal.solve(scaled.transpose() * records);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3> misfit =
+        records - scaled * normal.solve(scaled.transpose() * records);
     const double dof = n - 6.0, bound = dof + kGoodness * std::sqrt(2.0 * dof);
     for (int c = 0; c < 3; ++c) {
       double chi2 = 0.0;
@@ -264,9 +274,8 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
 
 std::vector<double> CrossViewSystem::inverse_fresnel(double R0) const {
   std::vector<double> inverse(data_.mu.size());
-  tbb::parallel_for(size_t(0), inverse.size(), [&](size_t k) {
-    inverse[k] = 1.0 / std::max(schlick_fresnel(R0, double(data_.mu[k])), 1e-30);
-  });
+  tbb::parallel_for(size_t(0), inverse.size(),
+                    [&](size_t k) { inverse[k] = 1.0 / std::max(schlick_fresnel(R0, double(data_.mu[k])), 1e-30); });
   return inverse;
 }
 
@@ -309,7 +318,8 @@ CrossViewSystem::PairTerms CrossViewSystem::pair_terms(double R0) const {
   return terms;
 }
 
-Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2, bool trim) const {
+Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2,
+                                       bool trim) const {
   const size_t used = size_t(terms.y.rows());
   const size_t chunks = (used + kChunk - 1) / kChunk;
   struct Sums {
@@ -318,7 +328,8 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
   };
   std::vector<Sums> partial(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
-    const Eigen::Index first = Eigen::Index(chunk * kChunk), rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
+    const Eigen::Index first = Eigen::Index(chunk * kChunk),
+                       rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
     const Eigen::MatrixXd X = terms.x.middleCols(first, rows).cast<double>();
     const auto Y = terms.y.middleRows(first, rows);
     Eigen::MatrixXd W = terms.weight.middleRows(first, rows);
@@ -326,8 +337,10 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
       for (Eigen::Index r = 0; r < rows; ++r) {
         const Eigen::Vector3d residual = Y.row(r).transpose() - reweight_at->transpose() * X.col(r);
         const double z = residual.cwiseAbs2().dot(W.row(r).transpose()) / (3.0 * c2);
-        if (trim) W.row(r) *= std::exp(-z);
-        else W.row(r) /= 1.0 + z;
+        if (trim)
+          W.row(r) *= std::exp(-z);
+        else
+          W.row(r) /= 1.0 + z;
       }
     Sums& s = partial[chunk];
     s.xy.resize(n_, 3);
@@ -426,7 +439,8 @@ void CrossViewSystem::calibrate(double R0) {
   scale_ = std::max(median_magnitude(fit(terms).d), kMinimumScale);
 }
 
-Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, int width, int height, double* seen) const {
+Eigen::MatrixXd CrossViewSystem::lighting(double R0, const Eigen::MatrixXd& d, int width, int height,
+                                          double* seen) const {
   const int lmax = data_.lmax;
   std::vector<Eigen::MatrixXd> rows(height);
   std::vector<Eigen::MatrixXd> unseen_rows(height);

@@ -143,8 +143,9 @@ class CrossViewSystem {
   // view's sample nearest r), written to `s`; false, leaving `s` as it is, where too few
   // exist, their quadratic is ill-conditioned, or (reach 2) it misfits them by more than
   // their noise (data.noise).
-  bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples, const std::vector<std::array<Vec3, 2>>& steps,
-                         uint32_t sample, uint32_t corner, int reach, Stencil& s) const;
+  bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
+                         const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, uint32_t corner, int reach,
+                         Stencil& s) const;
   // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
   std::vector<double> inverse_fresnel(double R0) const;
   // The residual's data and diffuse parts of pair p at the R0 of `inverse_F`, and its
@@ -158,7 +159,7 @@ class CrossViewSystem {
   // below the residuals it explains (at least 1e-5 of a pixel's level on noise-free
   // captures); y, a difference of nearly equal observations, in double.
   struct PairTerms {
-    Eigen::MatrixXf x;                          // n_ x pairs in use
+    Eigen::MatrixXf x;                                   // n_ x pairs in use
     Eigen::Matrix<double, Eigen::Dynamic, 3> y, weight;  // pairs in use x channels
   };
   PairTerms pair_terms(double R0) const;
@@ -179,7 +180,7 @@ class CrossViewSystem {
   std::vector<uint32_t> members_;
   std::vector<float> weights_;
   bool trim_;
-  double scale_ = INFINITY;      // robust scale of the normalised residuals
+  double scale_ = INFINITY;  // robust scale of the normalised residuals
   size_t stride_ = 1;
 };
 

@@ -50,7 +50,6 @@ struct DiffuseSolve {
 // basis is zero in every sample (nothing constrains it) gets Rd = 0. Throws glaze::Error
 // for non-finite samples or negative weights.
 DiffuseSolve solve_diffuse_reflectance(std::span<const RGB> observed, std::span<const RGB> specular,
-                                       std::span<const RGB> diffuse_basis,
-                                       std::span<const float> weights = {});
+                                       std::span<const RGB> diffuse_basis, std::span<const float> weights = {});
 
 }  // namespace glaze

@@ -60,7 +60,10 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
   // which the clamp at zero biases upwards; its L_lm stays sound.
   for (int c = 0; c < 3; ++c)
     if (fit.mirror_share >= 0.1 && fit.channel_mirror_share[c] < 0.1)
-      warnings.push_back(std::string("in the ") + (c == 0 ? "red" : c == 1 ? "green" : "blue") +
+      warnings.push_back(std::string("in the ") +
+                         (c == 0   ? "red"
+                          : c == 1 ? "green"
+                                   : "blue") +
                          " channel the mirror carries only " +
                          std::to_string(std::lround(100 * fit.channel_mirror_share[c])) +
                          "% of the light: that channel's high-resolution map is unreliable (noise divided by F, and "
@@ -73,10 +76,12 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
   // the smaller it is, the further capture noise moves R0, and Rd and the scale with it
   // (docs/notes/blue-room-white-sphere.md).
   if (joint && fit.mirror_share < 0.1)
-    warnings.push_back("--mode joint reads R0 and the lighting's absolute scale from the mirror reflection, which here "
-                       "carries only " + std::to_string(std::lround(100 * fit.mirror_share)) +
-                       "%: R0, Rd and the scale are weakly determined and capture noise can move them far (check the "
-                       "residual images); a known material (--mode lighting) or a glossier object pins them");
+    warnings.push_back(
+        "--mode joint reads R0 and the lighting's absolute scale from the mirror reflection, which here "
+        "carries only " +
+        std::to_string(std::lround(100 * fit.mirror_share)) +
+        "%: R0, Rd and the scale are weakly determined and capture noise can move them far (check the "
+        "residual images); a known material (--mode lighting) or a glossier object pins them");
 
   if (joint && !joint->passes_settled())
     diagnostics.convergence_warnings.push_back(
@@ -93,19 +98,18 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
 
   const int lmax = data.lmax;
   char report[640];
-  std::snprintf(report, sizeof report,
-                "glaze lighting recovery: linear least squares (no iterations)\n"
-                "  L_lm, lmax %d: %d unknowns per channel; condition number %.4g (before the ridge %.3g)\n"
-                "  solve: %s at %dx%d (%.1f%% of its covered texels seen from two or more views)\n"
-                "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n"
-                "  diffuse term modelled to l = %d%s\n",
-                lmax, sh_count(lmax), fit.condition, options.ridge,
-                fit.map_consistent ? "map-consistent (value and gradient per texel, with L_lm)"
-                                   : "SH-only least squares",
-                options.solve_width, options.solve_height, 100 * fit.multi_view_fraction, data.observed.size(),
-                fit.mirror_share, fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2],
-                data.diffuse_lmax,
-                data.diffuse_lmax > lmax ? " (bands above lmax predicted by a first fit's map: 2 passes)" : "");
+  std::snprintf(
+      report, sizeof report,
+      "glaze lighting recovery: linear least squares (no iterations)\n"
+      "  L_lm, lmax %d: %d unknowns per channel; condition number %.4g (before the ridge %.3g)\n"
+      "  solve: %s at %dx%d (%.1f%% of its covered texels seen from two or more views)\n"
+      "  samples %zu; mirror share %.3f (r %.3f, g %.3f, b %.3f)\n"
+      "  diffuse term modelled to l = %d%s\n",
+      lmax, sh_count(lmax), fit.condition, options.ridge,
+      fit.map_consistent ? "map-consistent (value and gradient per texel, with L_lm)" : "SH-only least squares",
+      options.solve_width, options.solve_height, 100 * fit.multi_view_fraction, data.observed.size(), fit.mirror_share,
+      fit.channel_mirror_share[0], fit.channel_mirror_share[1], fit.channel_mirror_share[2], data.diffuse_lmax,
+      data.diffuse_lmax > lmax ? " (bands above lmax predicted by a first fit's map: 2 passes)" : "");
   diagnostics.linear_report = report;
   return diagnostics;
 }
@@ -127,8 +131,8 @@ LightingComparison compare_lighting(const LightingFit& fit, const Environment& t
   LightingComparison comparison;
   const RGBd L00 = reference.values[0].abs().max(1e-12);
   for (int i = 0; i < sh_count(std::min(lmax, 2)); ++i)
-    comparison.L_lm_error_l2 = std::max(comparison.L_lm_error_l2,
-                                        ((fit.coefficients.values[i] - reference.values[i]).abs() / L00).maxCoeff());
+    comparison.L_lm_error_l2 =
+        std::max(comparison.L_lm_error_l2, ((fit.coefficients.values[i] - reference.values[i]).abs() / L00).maxCoeff());
   comparison.scale = fit.coefficients.values[0] / reference.values[0];
   for (const auto& [width, height] : {std::pair(64, 32), std::pair(128, 64), std::pair(256, 128)}) {
     if (fit.map.width % width != 0 || fit.map.height % height != 0) continue;

@@ -42,7 +42,8 @@ void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& 
     if (weight == 0.0f) return;
     const Ray centre_ray = camera.generate_ray(px + 0.5f, py + 0.5f);
     if (!centre_normal) {
-      const std::optional<SurfaceHit> centre = tracer.intersect(centre_ray, std::numeric_limits<float>::infinity(), false);
+      const std::optional<SurfaceHit> centre =
+          tracer.intersect(centre_ray, std::numeric_limits<float>::infinity(), false);
       if (!centre) return;  // interior pixels always hit; kept safe
       centre_normal = centre->normal;
     }
@@ -73,7 +74,8 @@ void for_each_model_pixel(const SampleSet& samples, size_t k, const CaptureSet& 
   const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
   const float tx = x - x0, ty = y - y0;
   for (int dy = 0; dy <= 1; ++dy)
-    for (int dx = 0; dx <= 1; ++dx) visit(x0 + dx, y0 + dy, (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty), std::nullopt);
+    for (int dx = 0; dx <= 1; ++dx)
+      visit(x0 + dx, y0 + dy, (dx ? tx : 1.0f - tx) * (dy ? ty : 1.0f - ty), std::nullopt);
 }
 
 }  // namespace glaze

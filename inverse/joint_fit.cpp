@@ -19,8 +19,8 @@ namespace {
 // neighbours of its best point), to `tolerance` relative plus a tenth of it absolute. With
 // three points known the first step is already the parabola's.
 template <typename Function>
-double minimise_bracketed(Function&& f, double a, double b, double x, double fx, double w, double fw, double v, double fv,
-                          double tolerance) {
+double minimise_bracketed(Function&& f, double a, double b, double x, double fx, double w, double fw, double v,
+                          double fv, double tolerance) {
   constexpr double kGolden = 0.3819660112501051;
   // A parabolic step is taken only when under half the step before last: both start at
   // the bracket's width, so that the first two steps may be parabolic.
@@ -50,8 +50,10 @@ double minimise_bracketed(Function&& f, double a, double b, double x, double fx,
       v = w, fv = fw, w = x, fw = fx, x = u, fx = fu;
     } else {
       (u < x ? a : b) = u;
-      if (fu <= fw || w == x) v = w, fv = fw, w = u, fw = fu;
-      else if (fu <= fv || v == x || v == w) v = u, fv = fu;
+      if (fu <= fw || w == x)
+        v = w, fv = fw, w = u, fw = fu;
+      else if (fu <= fv || v == x || v == w)
+        v = u, fv = fu;
     }
   }
   return x;
@@ -72,7 +74,8 @@ double minimise_on(Function&& f, const std::vector<double>& grid, double toleran
   // itself, and the first step is a golden section).
   const bool low_better = low != best && (high == best || values[low] <= values[high]);
   const size_t w = low_better ? low : high, v = low_better ? high : low;
-  return minimise_bracketed(f, grid[low], grid[high], grid[best], values[best], grid[w], values[w], grid[v], values[v], tolerance);
+  return minimise_bracketed(f, grid[low], grid[high], grid[best], values[best], grid[w], values[w], grid[v], values[v],
+                            tolerance);
 }
 
 // The searches for R0 stop at 1e-4 relative plus 1e-5 (R0 is asked to 1e-3).
@@ -100,8 +103,8 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
                            const JointFitOptions& joint) {
   const size_t count = data.observed.size();
   if (count < size_t(sh_count(data.lmax)) + 4)
-    throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) + "), got " +
-                std::to_string(count));
+    throw Error("the joint fit needs more samples than unknowns (" + std::to_string(sh_count(data.lmax) + 4) +
+                "), got " + std::to_string(count));
   // The views must see directions in common, as the map-consistent solve needs them.
   check_lighting_options(options);
   const double several_views = multi_view_fraction(data, options.solve_width, options.solve_height);
@@ -123,7 +126,8 @@ CrossViewSystem pair_views(const LightingData& data, const SampleSet& samples, c
 // docs/notes/turned-solve-grid.md. The lighting is solved on the unturned grid.
 constexpr int kGridTurns = 4;
 
-const std::string kTurnedSolve = "the map-consistent lighting solve at " + std::to_string(kGridTurns) + " turns of its grid";
+const std::string kTurnedSolve =
+    "the map-consistent lighting solve at " + std::to_string(kGridTurns) + " turns of its grid";
 
 std::string rd_method(const JointFitOptions& joint) {
   return joint.band_limited_diffuse ? "L_00 of the views' mirror estimates (band-limited diffuse)"
@@ -132,9 +136,9 @@ std::string rd_method(const JointFitOptions& joint) {
 
 // One line on what the solver did: rounds and evaluations (summed over the passes).
 std::string brief_report(const JointFit& fit, const CrossViewSystem& cross, const JointFitOptions& joint) {
-  return "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) + " evaluations over " +
-         std::to_string(cross.pair_count()) + " view pairs, " + (fit.converged ? "converged" : "NOT converged") +
-         "; Rd from " + rd_method(joint);
+  return "joint: " + std::to_string(fit.iterations) + " rounds, " + std::to_string(fit.evaluations) +
+         " evaluations over " + std::to_string(cross.pair_count()) + " view pairs, " +
+         (fit.converged ? "converged" : "NOT converged") + "; Rd from " + rd_method(joint);
 }
 
 // The map-consistent systems (above) of one set of observations: the kGridTurns turns
@@ -190,8 +194,8 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
   const ParameterSpec& r0_bounds = parameter_spec(MaterialParameter::R0);
   const ParameterSpec& rd_bounds = parameter_spec(MaterialParameter::Rd);
   std::vector<double> grid;  // R0 from 0 to 1, finest where coats are (0.02-0.06)
-  for (double R0 : {0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05, 0.06, 0.07, 0.08, 0.1, 0.12, 0.15,
-                    0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0})
+  for (double R0 : {0.0,  0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05, 0.06, 0.07,
+                    0.08, 0.1,   0.12, 0.15,  0.2,  0.25,  0.3,  0.4,   0.5,  0.6,   0.8,  1.0})
     if (R0 >= r0_bounds.lower && R0 <= r0_bounds.upper) grid.push_back(R0);
 
   JointFit fit;
@@ -251,9 +255,12 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
       const double reach = round == 1 ? 0.25 * R0 + 0.002 : std::max(4.0 * last_step, 0.02 * R0 + 0.0005);
       const double low = std::max(double(r0_bounds.lower), R0 - reach);
       const double high = std::min(double(r0_bounds.upper), R0 + reach);
-      R0 = minimise_on(misfit, round == 1 ? std::vector{low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high}
-                                          : std::vector{low, R0, high}, tolerance);
-      if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high) R0 = minimise_on(misfit, grid, tolerance);
+      R0 = minimise_on(
+          misfit,
+          round == 1 ? std::vector{low, 0.5 * (low + R0), R0, 0.5 * (R0 + high), high} : std::vector{low, R0, high},
+          tolerance);
+      if (std::abs(R0 - low) < 1e-6 * high || std::abs(R0 - high) < 1e-6 * high)
+        R0 = minimise_on(misfit, grid, tolerance);
     }
     ++fit.iterations;
     // The search's fit at R0 when it kept it (a tie can leave another point kept), and
@@ -261,8 +268,8 @@ JointFit joint_pass(const LightingData& data, CrossViewSystem& cross, const Ligh
     const CrossViewSystem::Fit at = round > 0 && best.R0 == R0 ? best.fit : cross.fit(R0);
     d = at.d;
     char line[160];
-    std::snprintf(line, sizeof line, "round %2d: R0 %.5f, robust misfit %.6g, %d evaluations so far\n", round, R0, at.cost,
-                  fit.evaluations);
+    std::snprintf(line, sizeof line, "round %2d: R0 %.5f, robust misfit %.6g, %d evaluations so far\n", round, R0,
+                  at.cost, fit.evaluations);
     rounds += line;
     if (observer) {
       FitIterate iterate;
@@ -367,9 +374,10 @@ JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int d
     fit.passes = last.passes + 1;
     fit.iterations += last.iterations, fit.evaluations += last.evaluations;
     char line[200];
-    std::snprintf(line, sizeof line, "pass %d: R0 %.5f, Rd %.4f %.4f %.4f; pass %d with bands %d-%d predicted from its "
-                  "lighting:\n", last.passes, last.R0, last.Rd[0], last.Rd[1], last.Rd[2], fit.passes, data.lmax + 1,
-                  diffuse_lmax);
+    std::snprintf(line, sizeof line,
+                  "pass %d: R0 %.5f, Rd %.4f %.4f %.4f; pass %d with bands %d-%d predicted from its "
+                  "lighting:\n",
+                  last.passes, last.R0, last.Rd[0], last.Rd[1], last.Rd[2], fit.passes, data.lmax + 1, diffuse_lmax);
     report += last.full_report + line;
     fit.pass_step = std::abs(double(fit.R0) - double(last.R0));
     fit.pass_Rd_step = (fit.Rd - last.Rd).abs().maxCoeff();

@@ -56,12 +56,12 @@ inline constexpr double kJointPassRdTolerance = 1e-3;
 struct JointFit {
   float R0 = 0.0f;
   RGB Rd = RGB::Zero();
-  LightingFit lighting;  // at the recovered material
-  int iterations = 0;    // rounds of step 1 (robust scale, then the search for R0)
-  int evaluations = 0;   // of the robust misfit
-  bool converged = false;  // the last pass's rounds, and the passes (below), settled
-  int passes = 1;  // of the fit (fit_joint_full_band: each predicts the bands for the next)
-  double pass_step = 0.0;  // how far the last pass moved R0 from the one before (0: one pass)
+  LightingFit lighting;       // at the recovered material
+  int iterations = 0;         // rounds of step 1 (robust scale, then the search for R0)
+  int evaluations = 0;        // of the robust misfit
+  bool converged = false;     // the last pass's rounds, and the passes (below), settled
+  int passes = 1;             // of the fit (fit_joint_full_band: each predicts the bands for the next)
+  double pass_step = 0.0;     // how far the last pass moved R0 from the one before (0: one pass)
   double pass_Rd_step = 0.0;  // and Rd, in its channel that moved most
   // Else the passes stopped at max_passes with R0 or Rd still moving.
   bool passes_settled() const { return pass_step < kJointPassTolerance && pass_Rd_step < kJointPassRdTolerance; }
@@ -94,6 +94,7 @@ JointFit fit_joint(const LightingData& data, const SampleSet& samples, const Lig
 // `data` receives the last pass's observations. diffuse_lmax <= data.lmax, or
 // band-limited captures: fit_joint alone.
 JointFit fit_joint_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax,
-                             const LightingFitOptions& options, JointFitOptions joint, const FitObserver& observer = {});
+                             const LightingFitOptions& options, JointFitOptions joint,
+                             const FitObserver& observer = {});
 
 }  // namespace glaze

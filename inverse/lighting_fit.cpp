@@ -28,10 +28,18 @@ struct Moments {
   Eigen::MatrixXd aa, ab, ac, bb, bc, cc, ao, bo, co;
   Eigen::Vector3d oo = Eigen::Vector3d::Zero();
   Moments(int n, bool observations_only)
-      : aa(Eigen::MatrixXd::Zero(observations_only ? 0 : n, observations_only ? 0 : n)), ab(aa), ac(aa), bb(aa), bc(aa),
-        cc(aa), ao(Eigen::MatrixXd::Zero(n, 3)), bo(ao), co(ao) {}
+      : aa(Eigen::MatrixXd::Zero(observations_only ? 0 : n, observations_only ? 0 : n)),
+        ab(aa),
+        ac(aa),
+        bb(aa),
+        bc(aa),
+        cc(aa),
+        ao(Eigen::MatrixXd::Zero(n, 3)),
+        bo(ao),
+        co(ao) {}
   Moments& operator+=(const Moments& m) {
-    aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co, oo += m.oo;
+    aa += m.aa, ab += m.ab, ac += m.ac, bb += m.bb, bc += m.bc, cc += m.cc, ao += m.ao, bo += m.bo, co += m.co,
+        oo += m.oo;
     return *this;
   }
 };
@@ -53,14 +61,16 @@ Moments sum_moments(size_t count, int n, bool observations_only, Chunk&& chunk) 
     chunk(first, stacked.topRows(n), stacked.middleRows(n, n), stacked.bottomRows(n), O);
     Moments& m = partial[index];
     const Eigen::MatrixXd with_observations = stacked * O;
-    m.ao = with_observations.topRows(n), m.bo = with_observations.middleRows(n, n), m.co = with_observations.bottomRows(n);
+    m.ao = with_observations.topRows(n), m.bo = with_observations.middleRows(n, n),
+    m.co = with_observations.bottomRows(n);
     m.oo = O.colwise().squaredNorm().transpose();
     if (observations_only) return;
     Eigen::MatrixXd lower = Eigen::MatrixXd::Zero(3 * n, 3 * n);
     lower.selfadjointView<Eigen::Lower>().rankUpdate(stacked);
     // Its blocks: on the diagonal, symmetric from their lower halves; below it, B A^T, ...
     auto block = [&](int row, int column) { return lower.block(row * n, column * n, n, n); };
-    m.aa = block(0, 0).template selfadjointView<Eigen::Lower>(), m.bb = block(1, 1).template selfadjointView<Eigen::Lower>();
+    m.aa = block(0, 0).template selfadjointView<Eigen::Lower>(),
+    m.bb = block(1, 1).template selfadjointView<Eigen::Lower>();
     m.cc = block(2, 2).template selfadjointView<Eigen::Lower>();
     m.ab = block(1, 0).transpose(), m.ac = block(2, 0).transpose(), m.bc = block(2, 1).transpose();
   });
@@ -76,8 +86,8 @@ void set_observations(LightingData& data, std::vector<RGB> observations, const M
 
 }  // namespace
 
-LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint, bool noise_free) {
+LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
+                                  int lmax, int footprint, bool noise_free) {
   if (footprint < 1 || footprint > 16) throw Error("the pixel footprint must be 1 to 16 rays per side");
   LightingData data;
   data.lmax = lmax;
@@ -97,52 +107,52 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
   data.mu.resize(count);
   data.frame.resize(count);
   std::vector<RGB> observations(count);
-  const Moments moments = sum_moments(count, n, false, [&](size_t first, ChunkRows A, ChunkRows B,
-                                                           ChunkRows C, Eigen::MatrixXd& O) {
-    std::vector<float> basis(n), g(size_t(footprint) * footprint);
-    std::vector<double> sum_Y(n), sum_gY(n);
-    std::vector<Vec3> reflected(g.size());
-    std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kChunk];
-    std::vector<float>& tap_share_g = chunk_tap_share_g[first / kChunk];
-    tap_normal.reserve(size_t(O.rows())), tap_share_g.reserve(size_t(O.rows()));  // one per pixel sample
-    for (Eigen::Index r = 0; r < O.rows(); ++r) {
-      const size_t k = first + size_t(r);
-      for_each_model_pixel(samples, k, captures, tracer, footprint,
-                           [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
-                             // Per ray, its mirror direction and g(n.v); their basis sums over the rays.
-                             double sum_g = 0.0;
-                             for (size_t ray = 0; ray < rays.size(); ++ray) {
-                               g[ray] = float(coat_transmittance_g(rays[ray].normal.dot(rays[ray].view)));
-                               reflected[ray] = reflect(rays[ray].view, rays[ray].normal);
-                               sum_g += g[ray];
-                             }
-                             sh_sum(lmax, std::span(reflected).first(rays.size()), std::span(g).first(rays.size()), sum_Y,
-                                    sum_gY);
-                             sh_eval<float>(lmax, centre_normal, basis);
-                             const double share = weight / rays.size(), share_g = share * sum_g;
-                             for (int i = 0; i < n; ++i) {
-                               A(i, r) += share * sum_Y[i];
-                               B(i, r) += share * sum_gY[i];
-                               C(i, r) += share_g * basis[i] * kernel[i];  // share g Lambda h Y(n)
-                             }
-                             tap_normal.push_back(centre_normal);
-                             tap_share_g.push_back(float(share_g));
-                             ++taps_of[k];
-                           });
-      // The rows are kept as floats, and the moments formed from the kept values, so
-      // that moments formed again later (take_off_diffuse_bands) agree with these.
-      for (int i = 0; i < n; ++i) {
-        data.a[k * n + i] = float(A(i, r)), data.b[k * n + i] = float(B(i, r)), data.c[k * n + i] = float(C(i, r));
-        A(i, r) = data.a[k * n + i], B(i, r) = data.b[k * n + i], C(i, r) = data.c[k * n + i];
-      }
-      const Sample& s = samples.samples[k];
-      O.row(r) = s.observed.cast<double>().matrix().transpose();
-      observations[k] = s.observed;
-      data.reflected[k] = reflect(s.view, s.normal);
-      data.mu[k] = s.mu;
-      data.frame[k] = s.frame;
-    }
-  });
+  const Moments moments =
+      sum_moments(count, n, false, [&](size_t first, ChunkRows A, ChunkRows B, ChunkRows C, Eigen::MatrixXd& O) {
+        std::vector<float> basis(n), g(size_t(footprint) * footprint);
+        std::vector<double> sum_Y(n), sum_gY(n);
+        std::vector<Vec3> reflected(g.size());
+        std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kChunk];
+        std::vector<float>& tap_share_g = chunk_tap_share_g[first / kChunk];
+        tap_normal.reserve(size_t(O.rows())), tap_share_g.reserve(size_t(O.rows()));  // one per pixel sample
+        for (Eigen::Index r = 0; r < O.rows(); ++r) {
+          const size_t k = first + size_t(r);
+          for_each_model_pixel(samples, k, captures, tracer, footprint,
+                               [&](const Vec3& centre_normal, const std::vector<FootprintRay>& rays, float weight) {
+                                 // Per ray, its mirror direction and g(n.v); their basis sums over the rays.
+                                 double sum_g = 0.0;
+                                 for (size_t ray = 0; ray < rays.size(); ++ray) {
+                                   g[ray] = float(coat_transmittance_g(rays[ray].normal.dot(rays[ray].view)));
+                                   reflected[ray] = reflect(rays[ray].view, rays[ray].normal);
+                                   sum_g += g[ray];
+                                 }
+                                 sh_sum(lmax, std::span(reflected).first(rays.size()), std::span(g).first(rays.size()),
+                                        sum_Y, sum_gY);
+                                 sh_eval<float>(lmax, centre_normal, basis);
+                                 const double share = weight / rays.size(), share_g = share * sum_g;
+                                 for (int i = 0; i < n; ++i) {
+                                   A(i, r) += share * sum_Y[i];
+                                   B(i, r) += share * sum_gY[i];
+                                   C(i, r) += share_g * basis[i] * kernel[i];  // share g Lambda h Y(n)
+                                 }
+                                 tap_normal.push_back(centre_normal);
+                                 tap_share_g.push_back(float(share_g));
+                                 ++taps_of[k];
+                               });
+          // The rows are kept as floats, and the moments formed from the kept values, so
+          // that moments formed again later (take_off_diffuse_bands) agree with these.
+          for (int i = 0; i < n; ++i) {
+            data.a[k * n + i] = float(A(i, r)), data.b[k * n + i] = float(B(i, r)), data.c[k * n + i] = float(C(i, r));
+            A(i, r) = data.a[k * n + i], B(i, r) = data.b[k * n + i], C(i, r) = data.c[k * n + i];
+          }
+          const Sample& s = samples.samples[k];
+          O.row(r) = s.observed.cast<double>().matrix().transpose();
+          observations[k] = s.observed;
+          data.reflected[k] = reflect(s.view, s.normal);
+          data.mu[k] = s.mu;
+          data.frame[k] = s.frame;
+        }
+      });
   data.first_tap.assign(count + 1, 0);
   for (size_t k = 0; k < count; ++k) data.first_tap[k + 1] = data.first_tap[k] + taps_of[k];
   for (size_t chunk = 0; chunk < chunk_tap_normal.size(); ++chunk) {
@@ -176,8 +186,8 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
   const int n = sh_count(data.lmax);
   const size_t count = samples.samples.size();
   if (data.observed.size() != count || data.a.size() != count * n || data.b.size() != count * n ||
-      data.c.size() != count * n || data.first_tap.size() != count + 1 || data.tap_normal.size() != data.first_tap.back() ||
-      data.tap_share_g.size() != data.first_tap.back())
+      data.c.size() != count * n || data.first_tap.size() != count + 1 ||
+      data.tap_normal.size() != data.first_tap.back() || data.tap_share_g.size() != data.first_tap.back())
     throw Error("internal: the diffuse bands are taken off data gathered from other samples (" +
                 std::to_string(data.observed.size()) + " against " + std::to_string(count) + ")");
   // E(n) of the bands above lmax alone.
@@ -190,24 +200,26 @@ void take_off_diffuse_bands(LightingData& data, const SampleSet& samples, const 
   // The observations are replaced last, with their moments, so that `data` stays whole
   // when an exception leaves.
   std::vector<RGB> observations(count);
-  const Moments moments = sum_moments(count, n, true, [&](size_t first, ChunkRows A, ChunkRows B,
-                                                          ChunkRows C, Eigen::MatrixXd& O) {
-    // E_above at the chunk's taps, all at once (SIMD lanes of normals).
-    const size_t first_tap = data.first_tap[first], taps = data.first_tap[first + size_t(O.rows())] - first_tap;
-    std::vector<RGB> E_tap(above_sum ? taps : 0);
-    if (above_sum) (*above_sum)(std::span(data.tap_normal).subspan(first_tap, taps), E_tap);
-    for (Eigen::Index r = 0; r < O.rows(); ++r) {
-      const size_t k = first + size_t(r);
-      A.col(r) = data.a_row(k).cast<double>(), B.col(r) = data.b_row(k).cast<double>(), C.col(r) = data.c_row(k).cast<double>();
-      // sum share_g E_above(normal) over the taps: the bands' share of the diffuse rows.
-      RGBd E_above = RGBd::Zero();
-      for (size_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
-        E_above += double(data.tap_share_g[tap]) * E_tap[tap - first_tap].cast<double>();
-      const RGB observed = (samples.samples[k].observed.cast<double>() - above.per_lighting * E_above).cast<float>();
-      O.row(r) = observed.cast<double>().matrix().transpose();
-      observations[k] = observed;
-    }
-  });
+  const Moments moments =
+      sum_moments(count, n, true, [&](size_t first, ChunkRows A, ChunkRows B, ChunkRows C, Eigen::MatrixXd& O) {
+        // E_above at the chunk's taps, all at once (SIMD lanes of normals).
+        const size_t first_tap = data.first_tap[first], taps = data.first_tap[first + size_t(O.rows())] - first_tap;
+        std::vector<RGB> E_tap(above_sum ? taps : 0);
+        if (above_sum) (*above_sum)(std::span(data.tap_normal).subspan(first_tap, taps), E_tap);
+        for (Eigen::Index r = 0; r < O.rows(); ++r) {
+          const size_t k = first + size_t(r);
+          A.col(r) = data.a_row(k).cast<double>(), B.col(r) = data.b_row(k).cast<double>(),
+          C.col(r) = data.c_row(k).cast<double>();
+          // sum share_g E_above(normal) over the taps: the bands' share of the diffuse rows.
+          RGBd E_above = RGBd::Zero();
+          for (size_t tap = data.first_tap[k]; above_sum && tap < data.first_tap[k + 1]; ++tap)
+            E_above += double(data.tap_share_g[tap]) * E_tap[tap - first_tap].cast<double>();
+          const RGB observed =
+              (samples.samples[k].observed.cast<double>() - above.per_lighting * E_above).cast<float>();
+          O.row(r) = observed.cast<double>().matrix().transpose();
+          observations[k] = observed;
+        }
+      });
   set_observations(data, std::move(observations), moments);
   data.diffuse_lmax = above_sum ? above.lighting.lmax : data.lmax;
 }
@@ -298,10 +310,13 @@ MapConsistentSystem::MapConsistentSystem(const LightingData& data, int width, in
   for (int t = 0; t < width * height; ++t) {
     const int j = t / width;
     const double solid_angle = latlong_texel_solid_angle(j, width, height);
-    sh_eval<float>(data.lmax, latlong_to_direction(Vec2(float((t % width + 0.5 + turn) / width), (j + 0.5f) / height)), basis);
+    sh_eval<float>(data.lmax, latlong_to_direction(Vec2(float((t % width + 0.5 + turn) / width), (j + 0.5f) / height)),
+                   basis);
     const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXf>(basis.data(), n_).cast<double>();
-    if (index[t] >= 0) P.col(index[t]) = solid_angle * y;
-    else uncovered += solid_angle * y * y.transpose();
+    if (index[t] >= 0)
+      P.col(index[t]) = solid_angle * y;
+    else
+      uncovered += solid_angle * y * y.transpose();
   }
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n_, n_);
   Q_ = (I - uncovered + ridge * I).ldlt().solve(P);
@@ -329,7 +344,7 @@ MapConsistentSystem::Profile MapConsistentSystem::profile(double R0) const {
   const std::vector<Eigen::Matrix3d> B = blocks(q);
   const Eigen::MatrixXd E = phi_c_ - q * g_phi_c_;  // E' (3m x n): E = s E'
   Eigen::MatrixXd B_inverse_E(3 * m, n), b1(3 * m, 3), B_inverse_b1(3 * m, 3);
-  Eigen::VectorXd value_weight(m);                  // (B_t^-1)_00
+  Eigen::VectorXd value_weight(m);                          // (B_t^-1)_00
   Eigen::MatrixXd value_rows_E(m, n), value_rows_b1(m, 3);  // the value rows of B^-1 E', B^-1 b1
   for (int t = 0; t < m; ++t) {
     const Eigen::Matrix3d inverse = B[t].inverse();
@@ -448,7 +463,9 @@ constexpr double kBetweenSamples = 3.0 * kPiD / 180.0;
 class SplatRows {
  public:
   SplatRows(int width, int height)
-      : width_(width), height_(height), sum_(size_t(width + 1) * height, RGBd::Zero()),
+      : width_(width),
+        height_(height),
+        sum_(size_t(width + 1) * height, RGBd::Zero()),
         mirror_weight_(sum_.size(), 0.0) {}
 
   // Texel t's estimate and mirror weight (t = j width + i; each texel once, before sum_rows).
@@ -636,8 +653,10 @@ double multi_view_fraction(const LightingData& data, int width, int height) {
   for (size_t k = 0; k < data.reflected.size(); ++k) {
     const Vec2 uv = direction_to_latlong(data.reflected[k]);
     const size_t t = texel_of(uv, width, height);
-    if (first_view[t] < 0) first_view[t] = data.frame[k];
-    else if (first_view[t] != data.frame[k]) several[t] = 1;
+    if (first_view[t] < 0)
+      first_view[t] = data.frame[k];
+    else if (first_view[t] != data.frame[k])
+      several[t] = 1;
   }
   const double covered = double(std::count_if(first_view.begin(), first_view.end(), [](int v) { return v >= 0; }));
   return covered > 0 ? std::count(several.begin(), several.end(), 1) / covered : 0.0;
@@ -649,8 +668,8 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
   const size_t count = data.observed.size();
   if (data.noise.size() != count) throw Error("lighting recovery needs the captures' noise model (estimate_noise)");
   if (count < size_t(n))
-    throw Error("lighting recovery needs at least " + std::to_string(n) + " samples for lmax " + std::to_string(data.lmax) +
-                ", got " + std::to_string(count));
+    throw Error("lighting recovery needs at least " + std::to_string(n) + " samples for lmax " +
+                std::to_string(data.lmax) + ", got " + std::to_string(count));
   check_lighting_options(options);
   LightingFit fit;
   fit.coefficients = ShCoefficients(data.lmax);
@@ -761,8 +780,8 @@ DiffuseBandsAbove predict_diffuse_bands(const Image& map, int diffuse_lmax, floa
   return {recovered.sh(diffuse_lmax), ShadingCoefficients<double>(R0).diffuse * Rd.cast<double>()};
 }
 
-LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,
-                                   const LightingFitOptions& options) {
+LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0,
+                                   const RGB& Rd, const LightingFitOptions& options) {
   if (diffuse_lmax <= data.lmax) return fit_lighting(data, R0, Rd, options);
   // The first fit's map only predicts the bands: the SH-only least squares under it does
   // as well there as the map-consistent solve, at a fraction of the cost: the second fit

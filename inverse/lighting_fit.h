@@ -86,15 +86,15 @@ struct LightingData {
 // band: under small bright sources the bands above 4 carry about 5% of it (the kernel's
 // h_l decay slowly, sh.h), as much as a diffuse object's whole mirror reflection.
 struct DiffuseBandsAbove {
-  ShCoefficients lighting;  // its bands lmax+1 .. lighting.lmax are used
+  ShCoefficients lighting;           // its bands lmax+1 .. lighting.lmax are used
   RGBd per_lighting = RGBd::Zero();  // 21/(20 pi) (1 - R0) Rd: radiance per unit of g E(n)
 };
 
 // The samples' model rows at lmax, each pixel modelled by footprint x footprint rays
 // (footprint.h), their moments, and the observations' noise (estimate_noise; for
 // `noise_free` captures its floor).
-LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer, int lmax,
-                                  int footprint, bool noise_free);
+LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& captures, const RayTracer& tracer,
+                                  int lmax, int footprint, bool noise_free);
 
 // Replaces the observations of `data` (gathered from these samples) by the captured ones
 // less the diffuse radiance of the bands `above`, so that what remains is what the fit's
@@ -127,7 +127,7 @@ struct LightingFit {
   // weight (sum F^2 >= 1e-4), 0 where it holds the SH reconstruction (lighting_fit.cpp).
   std::vector<float> covered;
   double covered_fraction = 0.0;
-  double mirror_share = 0.0;  // fraction of the observed light the mirror term carries
+  double mirror_share = 0.0;                 // fraction of the observed light the mirror term carries
   RGBd channel_mirror_share = RGBd::Zero();  // the same per channel
   // Fraction of the solve map's covered texels that two or more views reflect into; the
   // map-consistent solve needs several views per direction to separate the mirror from
@@ -185,10 +185,10 @@ class MapConsistentSystem {
 
    private:
     friend class MapConsistentSystem;
-    double diffuse_per_Rd = 0.0;      // 21/(20 pi) (1 - R0): s = diffuse_per_Rd Rd
-    Eigen::MatrixXd EE, EQ, QQ, cc;   // E'^T B^-1 E', E'^T B^-1 Qx^T, Qx B^-1 Qx^T, sum c c^T
-    Eigen::MatrixXd vE, vQ, co;       // per channel (columns): E'^T B^-1 b1, Qx B^-1 b1, sum c o
-    Eigen::Vector3d bb, oo;           // b1^T B^-1 b1, sum o^2
+    double diffuse_per_Rd = 0.0;     // 21/(20 pi) (1 - R0): s = diffuse_per_Rd Rd
+    Eigen::MatrixXd EE, EQ, QQ, cc;  // E'^T B^-1 E', E'^T B^-1 Qx^T, Qx B^-1 Qx^T, sum c c^T
+    Eigen::MatrixXd vE, vQ, co;      // per channel (columns): E'^T B^-1 b1, Qx B^-1 b1, sum c o
+    Eigen::Vector3d bb, oo;          // b1^T B^-1 b1, sum o^2
   };
   Profile profile(double R0) const;
 
@@ -202,9 +202,9 @@ class MapConsistentSystem {
   // and g phi c^T.
   std::vector<Eigen::Matrix3d> phi_phi_, g_phi_phi_, gg_phi_phi_, phi_o_, g_phi_o_;
   Eigen::MatrixXd phi_c_, g_phi_c_;
-  Eigen::MatrixXd cc_, co_;          // sum c c^T, sum c o
+  Eigen::MatrixXd cc_, co_;                       // sum c c^T, sum c o
   Eigen::Vector3d oo_ = Eigen::Vector3d::Zero();  // sum o^2
-  Eigen::MatrixXd Q_;                // G P
+  Eigen::MatrixXd Q_;                             // G P
 };
 
 // Throws glaze::Error for map sizes over 4096x2048 or a ridge outside (0, 1].
@@ -230,8 +230,8 @@ LightingFit fit_lighting(const LightingData& data, float R0, const RGB& Rd, cons
 // second's observations. One correction, not an iteration: a third fit barely moves
 // L_lm (docs/notes/lighting-map.md, "The second fit for full-band captures").
 // diffuse_lmax <= data.lmax: fit_lighting alone.
-LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0, const RGB& Rd,
-                                   const LightingFitOptions& options);
+LightingFit fit_lighting_full_band(LightingData& data, const SampleSet& samples, int diffuse_lmax, float R0,
+                                   const RGB& Rd, const LightingFitOptions& options);
 
 // Relative RMSE of the recovered map against a known environment, both box-filtered to
 // width x height cells (solid-angle weighted), over the cells whose every map texel

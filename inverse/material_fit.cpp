@@ -40,11 +40,16 @@ std::vector<ShadingTerms> shading_terms(const SampleSet& samples, const CaptureS
 
 RobustLoss RobustLoss::parse(const std::string& name, double scale) {
   RobustLoss loss;
-  if (name == "none") loss.kind = Kind::none;
-  else if (name == "huber") loss.kind = Kind::huber;
-  else if (name == "cauchy") loss.kind = Kind::cauchy;
-  else throw Error("unknown loss '" + name + "' (known: none, huber, cauchy)");
-  if (loss.kind != Kind::none && !(scale > 0.0 && std::isfinite(scale))) throw Error("the loss scale must be a positive number");
+  if (name == "none")
+    loss.kind = Kind::none;
+  else if (name == "huber")
+    loss.kind = Kind::huber;
+  else if (name == "cauchy")
+    loss.kind = Kind::cauchy;
+  else
+    throw Error("unknown loss '" + name + "' (known: none, huber, cauchy)");
+  if (loss.kind != Kind::none && !(scale > 0.0 && std::isfinite(scale)))
+    throw Error("the loss scale must be a positive number");
   loss.scale = scale;
   return loss;
 }
@@ -71,7 +76,8 @@ T loss_ratio(const RobustLoss& loss, const T& s) {
       if (x < T(1e-8)) return T(1) - x / T(2);
       return log(T(1) + x) / x;
     }
-    case RobustLoss::Kind::none: break;
+    case RobustLoss::Kind::none:
+      break;
   }
   return T(1);
 }
@@ -80,9 +86,12 @@ T loss_ratio(const RobustLoss& loss, const T& s) {
 double loss_weight(const RobustLoss& loss, double s) {
   const double d2 = loss.scale * loss.scale;
   switch (loss.kind) {
-    case RobustLoss::Kind::huber: return s <= d2 ? 1.0 : loss.scale / std::sqrt(s);
-    case RobustLoss::Kind::cauchy: return 1.0 / (1.0 + s / d2);
-    case RobustLoss::Kind::none: break;
+    case RobustLoss::Kind::huber:
+      return s <= d2 ? 1.0 : loss.scale / std::sqrt(s);
+    case RobustLoss::Kind::cauchy:
+      return 1.0 / (1.0 + s / d2);
+    case RobustLoss::Kind::none:
+      break;
   }
   return 1.0;
 }
@@ -119,7 +128,9 @@ class NestedResidual {
  private:
   static double scalar(double x) { return x; }
   template <typename J>
-  static double scalar(const J& x) { return x.a; }
+  static double scalar(const J& x) {
+    return x.a;
+  }
 
   int group_of(size_t k) const { return group_.empty() ? 0 : group_[k]; }
   double base_weight(size_t k) const { return weights_.empty() ? 1.0 : weights_[k]; }
@@ -205,7 +216,8 @@ class MomentResidual {
       for (int c = 0; c < 3; ++c) {
         const T z[3] = {T(1), q, q * equations.solve(c)};
         const Eigen::Matrix3d& U = factors_[group * 3 + c];
-        for (int i = 0; i < 3; ++i) residuals[(group * 3 + c) * 3 + i] = T(U(i, 0)) * z[0] + T(U(i, 1)) * z[1] + T(U(i, 2)) * z[2];
+        for (int i = 0; i < 3; ++i)
+          residuals[(group * 3 + c) * 3 + i] = T(U(i, 0)) * z[0] + T(U(i, 1)) * z[1] + T(U(i, 2)) * z[2];
       }
     }
     return true;
@@ -320,13 +332,15 @@ MaterialFit fit_material(std::span<const Sample> samples, std::span<const Shadin
   double light = 0.0;
   for (const Sample& s : samples) light += s.observed.abs().sum();
   if (!(light > 1e-12 * samples.size()))
-    throw Error("the images are black wherever the object is seen: there is no light to fit a material to "
-                "(check the exposure and that the object is lit)");
+    throw Error(
+        "the images are black wherever the object is seen: there is no light to fit a material to "
+        "(check the exposure and that the object is lit)");
 
   const int group_count = group.empty() ? 1 : groups;
-  MaterialFit fit = options.loss.kind == RobustLoss::Kind::none
-                        ? solve_outer(MomentResidual(samples, terms, group, group_count, weights), options)
-                        : solve_outer(NestedResidual(samples, terms, group, group_count, weights, options.loss), options);
+  MaterialFit fit =
+      options.loss.kind == RobustLoss::Kind::none
+          ? solve_outer(MomentResidual(samples, terms, group, group_count, weights), options)
+          : solve_outer(NestedResidual(samples, terms, group, group_count, weights, options.loss), options);
   double squared = 0.0;
   for (size_t k = 0; k < samples.size(); ++k) {
     const RGB r = samples[k].observed - predict(terms[k], fit.R0, fit.Rd[group.empty() ? 0 : group[k]]);

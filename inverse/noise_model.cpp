@@ -34,7 +34,8 @@ constexpr size_t kWalkRanks = 32;
 // count of 0 where there is none.
 template <bool kUpwards>
 std::pair<double, size_t> nearest_beyond(const double* v, size_t padded, double bound, bool inclusive) {
-  constexpr double kNone = kUpwards ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
+  constexpr double kNone =
+      kUpwards ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
   auto load = [&](size_t i) { return Lanes(v + i, std::experimental::element_aligned); };
   Lanes nearest(kNone);
   for (size_t i = 0; i < padded; i += Lanes::size()) {
@@ -160,23 +161,26 @@ std::vector<RGB> estimate_noise(const std::vector<RGB>& observed, const SampleSe
   if (!noise_free)
     for (size_t f = 0; f < grids.size(); ++f)
       residual[f].assign(size_t(grids[f].width()) * grids[f].height(), RGBd::Constant(-1.0));
-  auto pixel_of = [&](size_t k) { return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y())); };
-  if (!noise_free) tbb::parallel_for(size_t(0), count, [&](size_t k) {
-    const PixelGrid& grid = grids[samples.samples[k].frame];
-    const auto [i, j] = pixel_of(k);
-    RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
-    for (int dj = -1; dj <= 1; ++dj)
-      for (int di = -1; di <= 1; ++di) {
-        if (di == 0 && dj == 0) continue;
-        const int64_t m = grid.sample_at(i + di, j + dj);
-        if (m < 0) return;
-        (di == 0 || dj == 0 ? edges : corners) += observed[m].cast<double>();
-      }
-    // Left -1 (no residual) unless finite in every channel: a window's median counts it
-    // in all three.
-    if (const RGBd e = (observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25; e.allFinite())
-      residual[samples.samples[k].frame][size_t(j - grid.y0()) * grid.width() + (i - grid.x0())] = e;
-  });
+  auto pixel_of = [&](size_t k) {
+    return std::pair(int(samples.samples[k].film.x()), int(samples.samples[k].film.y()));
+  };
+  if (!noise_free)
+    tbb::parallel_for(size_t(0), count, [&](size_t k) {
+      const PixelGrid& grid = grids[samples.samples[k].frame];
+      const auto [i, j] = pixel_of(k);
+      RGBd edges = RGBd::Zero(), corners = RGBd::Zero();
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          if (di == 0 && dj == 0) continue;
+          const int64_t m = grid.sample_at(i + di, j + dj);
+          if (m < 0) return;
+          (di == 0 || dj == 0 ? edges : corners) += observed[m].cast<double>();
+        }
+      // Left -1 (no residual) unless finite in every channel: a window's median counts it
+      // in all three.
+      if (const RGBd e = (observed[k].cast<double>() - edges / 2.0 + corners / 4.0).square() / 2.25; e.allFinite())
+        residual[samples.samples[k].frame][size_t(j - grid.y0()) * grid.width() + (i - grid.x0())] = e;
+    });
   RGBd mean = RGBd::Zero();
   for (const RGB& o : observed) mean += o.cast<double>();
   const RGBd offset = (0.01 * mean / double(count)).max(1e-12);

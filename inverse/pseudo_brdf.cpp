@@ -25,7 +25,8 @@ Spectrum gaussian(double centre, double width) {
 // Rows: the camera's sensitivities, each summing to 1 (a flat spectrum of 1 reads 1).
 Eigen::Matrix<double, 3, kWavelengths> camera() {
   Eigen::Matrix<double, 3, kWavelengths> s;
-  s.row(0) = gaussian(610, 28).transpose(), s.row(1) = gaussian(540, 28).transpose(), s.row(2) = gaussian(455, 25).transpose();
+  s.row(0) = gaussian(610, 28).transpose(), s.row(1) = gaussian(540, 28).transpose(),
+  s.row(2) = gaussian(455, 25).transpose();
   for (int c = 0; c < 3; ++c) s.row(c) /= s.row(c).sum();
   return s;
 }
@@ -108,10 +109,12 @@ Image render_sh_spectral(const Scene& scene, const RayTracer& tracer, const Envi
     Image primary(map.width, map.height);
     for (size_t p = 0; p * 3 < map.pixels.size(); ++p)
       for (int c = 0; c < 3; ++c) primary.pixels[3 * p + c] = map.pixels[3 * p + i];
-    const Environment light(std::move(primary), same_frame, environment.source() + " (primary " + std::to_string(i) + ")");
+    const Environment light(std::move(primary), same_frame,
+                            environment.source() + " (primary " + std::to_string(i) + ")");
     const Image with = render_sh(unit, tracer, light, camera, options);
     const Image without = render_sh(mirror, tracer, light, camera, options);
-    for (size_t k = 0; k < total.pixels.size(); ++k) total.pixels[k] += M(k % 3, i) * (with.pixels[k] - without.pixels[k]);
+    for (size_t k = 0; k < total.pixels.size(); ++k)
+      total.pixels[k] += M(k % 3, i) * (with.pixels[k] - without.pixels[k]);
   }
   return total;
 }

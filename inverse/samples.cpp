@@ -61,8 +61,9 @@ std::vector<Vec3> surface_points(const Scene& scene, int count, uint64_t seed) {
   Pcg32 rng(seed, 0x5eed);
   for (int i = 0; i < count; ++i) {
     const double target = rng.next_float() * total;
-    const size_t k = std::min(size_t(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()),
-                              cumulative.size() - 1);
+    const size_t k =
+        std::min(size_t(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()),
+                 cumulative.size() - 1);
     const TriangleMesh& mesh = scene.meshes[triangles[k].first];
     const auto& tri = mesh.triangles[triangles[k].second];
     float a = rng.next_float(), b = rng.next_float();
@@ -108,23 +109,28 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
   if (!(options.min_cos >= 0.0f && options.min_cos < 1.0f)) throw Error("the grazing threshold must be in [0, 1)");
   SampleSet set;
   set.pixels = options.points == 0;
-  const std::vector<Vec3> points = options.points > 0 ? surface_points(object_scene, options.points, options.seed)
-                                                      : std::vector<Vec3>();
+  const std::vector<Vec3> points =
+      options.points > 0 ? surface_points(object_scene, options.points, options.seed) : std::vector<Vec3>();
   for (size_t f = 0; f < captures.frames.size(); ++f) {
     const CaptureFrame& frame = captures.frames[f];
     const PinholeCamera& camera = frame.camera;
     const Image image = read_image(frame.file_path);
     if (image.width != camera.width || image.height != camera.height)
-      throw Error(frame.file_path + ": the image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                  " but transforms.json gives its camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+      throw Error(frame.file_path + ": the image is " + std::to_string(image.width) + "x" +
+                  std::to_string(image.height) + " but transforms.json gives its camera " +
+                  std::to_string(camera.width) + "x" + std::to_string(camera.height));
     std::optional<Image> mask;
     if (!frame.mask_path.empty()) {
       mask = read_image(frame.mask_path);
       if (mask->width != image.width || mask->height != image.height)
         throw Error(frame.mask_path + ": the mask's size differs from its image " + frame.file_path);
     }
-    const FrameView view{camera, image, mask ? &*mask : nullptr, interior_mask(tracer, camera),
-                         captures.saturation.value_or(std::numeric_limits<float>::infinity()), options.min_cos};
+    const FrameView view{camera,
+                         image,
+                         mask ? &*mask : nullptr,
+                         interior_mask(tracer, camera),
+                         captures.saturation.value_or(std::numeric_limits<float>::infinity()),
+                         options.min_cos};
     auto masked_at = [&](int x, int y) { return view.mask && view.mask->at(x, y)[0] < 0.5f; };
     DropCounts dropped;
     std::vector<Sample> kept;
@@ -155,7 +161,8 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
       for (const Vec3& point : points) {
         const Vec3 local = world_to_camera * point;
         if (!(local.z() < 0.0f)) continue;  // behind the camera
-        const float fx = camera.cx + camera.fl_x * local.x() / -local.z(), fy = camera.cy - camera.fl_y * local.y() / -local.z();
+        const float fx = camera.cx + camera.fl_x * local.x() / -local.z(),
+                    fy = camera.cy - camera.fl_y * local.y() / -local.z();
         if (!(fx >= 0.0f && fy >= 0.0f && fx < camera.width && fy < camera.height)) continue;
         const Ray ray = camera.generate_ray(fx, fy);
         const std::optional<SurfaceHit> hit = tracer.intersect(ray);
@@ -173,8 +180,10 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
         }
         const RGB observed =
             bilinear(image, bilinear_footprint(fx, fy, image.width, image.height, Wrap::clamp, Wrap::clamp));
-        const bool masked = masked_at(x0, y0) || masked_at(x0 + 1, y0) || masked_at(x0, y0 + 1) || masked_at(x0 + 1, y0 + 1);
-        if (view.keep(*hit, -ray.direction, observed, masked, dropped)) kept.push_back(make_sample(*hit, -ray.direction, observed, int(f), Vec2(fx, fy)));
+        const bool masked =
+            masked_at(x0, y0) || masked_at(x0 + 1, y0) || masked_at(x0, y0 + 1) || masked_at(x0 + 1, y0 + 1);
+        if (view.keep(*hit, -ray.direction, observed, masked, dropped))
+          kept.push_back(make_sample(*hit, -ray.direction, observed, int(f), Vec2(fx, fy)));
       }
     }
     set.per_frame.push_back(kept.size());
@@ -183,7 +192,8 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
   }
   if (set.samples.empty()) {
     const DropCounts d = set.total_dropped();
-    throw Error(captures.directory + ": no usable sample: the object is not visible in any view, or every pixel on it was dropped (" +
+    throw Error(captures.directory +
+                ": no usable sample: the object is not visible in any view, or every pixel on it was dropped (" +
                 std::to_string(d.grazing) + " grazing, " + std::to_string(d.silhouette) + " on the silhouette, " +
                 std::to_string(d.non_finite) + " not finite, " + std::to_string(d.saturated) + " saturated, " +
                 std::to_string(d.masked) + " masked); check the object and camera poses in transforms.json");

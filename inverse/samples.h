@@ -26,9 +26,9 @@ struct Sample {
   Vec3 view;    // unit, from the surface towards the camera
   float mu;     // n.v
   RGB observed;
-  Vec2 uv;      // texture coordinate (lat-long of the normal for a sphere)
-  int frame;    // index into the capture set's frames
-  Vec2 film;    // where it was seen: the pixel centre (pixel samples) or the projected point
+  Vec2 uv;    // texture coordinate (lat-long of the normal for a sphere)
+  int frame;  // index into the capture set's frames
+  Vec2 film;  // where it was seen: the pixel centre (pixel samples) or the projected point
 };
 
 struct DropCounts {

@@ -8,11 +8,12 @@
 
 namespace glaze {
 
-RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width, int height,
-                             const MaterialFit& homogeneous, const MaterialFitOptions& options) {
+RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width,
+                             int height, const MaterialFit& homogeneous, const MaterialFitOptions& options) {
   // One Rd group per texel, each with 3x3 moments per channel: 1024x512 keeps that near 200 MB.
   if (width < 1 || height < 1 || width > 1024 || height > 512)
-    throw Error("the texture resolution must be at most 1024x512, got " + std::to_string(width) + "x" + std::to_string(height));
+    throw Error("the texture resolution must be at most 1024x512, got " + std::to_string(width) + "x" +
+                std::to_string(height));
   std::vector<int> group(samples.size());
   std::vector<float> weights(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) {

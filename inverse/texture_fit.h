@@ -21,11 +21,10 @@ struct RecoveredTexture {
   MaterialFit fit;           // the solver's account
 };
 
-
 // `homogeneous` is the homogeneous fit of the same samples (its R0 starts the search
 // and its Rd judges the weights).
-RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width, int height,
-                             const MaterialFit& homogeneous, const MaterialFitOptions& options);
+RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const ShadingTerms> terms, int width,
+                             int height, const MaterialFit& homogeneous, const MaterialFitOptions& options);
 
 // RMSE over the known texels against a reference texture (times its Rd factor), each
 // recovered texel compared with the mean of the reference over its area.

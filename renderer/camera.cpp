@@ -4,8 +4,8 @@
 
 namespace glaze {
 
-PinholeCamera PinholeCamera::from_vertical_fov(std::string name, const Eigen::Affine3f& camera_to_world,
-                                               float yfov, int width, int height) {
+PinholeCamera PinholeCamera::from_vertical_fov(std::string name, const Eigen::Affine3f& camera_to_world, float yfov,
+                                               int width, int height) {
   if (!(yfov > 0.0f && yfov < kPi))
     throw Error("camera '" + name + "': vertical field of view must be in (0, pi) radians, got " +
                 std::to_string(yfov));

@@ -150,7 +150,8 @@ std::vector<float> numbers(const json& value, size_t count, const std::string& w
   if (!value.is_array() || value.size() != count)
     fail(where, quoted(key) + " must be an array of " + std::to_string(count) + " numbers, not " + value.dump());
   std::vector<float> result;
-  for (size_t i = 0; i < count; ++i) result.push_back(number(value[i], where, key + "[" + std::to_string(i) + "]", range));
+  for (size_t i = 0; i < count; ++i)
+    result.push_back(number(value[i], where, key + "[" + std::to_string(i) + "]", range));
   return result;
 }
 
@@ -167,8 +168,9 @@ fs::path transforms_file(const std::string& path) {
     throw Error(path + ": no such file or directory; give a capture directory or its transforms.json");
   const fs::path file = fs::is_directory(path, ec) ? fs::path(path) / "transforms.json" : fs::path(path);
   if (!fs::is_regular_file(file, ec))
-    throw Error(file.string() + ": not found or not a file; a capture directory holds a transforms.json "
-                                "(glaze render --captures writes one)");
+    throw Error(file.string() +
+                ": not found or not a file; a capture directory holds a transforms.json "
+                "(glaze render --captures writes one)");
   return file;
 }
 
@@ -192,12 +194,15 @@ class TransformsReader {
       : file_(file.string()), directory_(file.has_parent_path() ? file.parent_path() : fs::path(".")), root_(root) {}
 
   CaptureSet read() const {
-    if (!root_.is_object()) fail(file_, "the top level must be an object {\"frames\": [...], \"object\": {...}, ...}, not " +
+    if (!root_.is_object())
+      fail(file_, "the top level must be an object {\"frames\": [...], \"object\": {...}, ...}, not " +
                       std::string(root_.type_name()));
-    const json& frames = member(root_, "frames", file_, "the views: [{\"file_path\": ..., \"transform_matrix\": ...}, ...]");
+    const json& frames =
+        member(root_, "frames", file_, "the views: [{\"file_path\": ..., \"transform_matrix\": ...}, ...]");
     if (!frames.is_array() || frames.empty())
-      fail(file_, "\"frames\" must be a non-empty array of views {\"file_path\": ..., \"transform_matrix\": ...}, not " +
-                      frames.dump());
+      fail(file_,
+           "\"frames\" must be a non-empty array of views {\"file_path\": ..., \"transform_matrix\": ...}, not " +
+               frames.dump());
     CaptureSet set;
     set.directory = directory_.string();
     for (size_t i = 0; i < frames.size(); ++i) set.frames.push_back(frame(frames[i], i));
@@ -239,7 +244,8 @@ class TransformsReader {
 
   CaptureFrame frame(const json& entry, size_t index) const {
     std::string where = file_ + ": frame " + std::to_string(index);
-    if (!entry.is_object()) fail(where, "must be an object {\"file_path\": ..., \"transform_matrix\": ...}, not " + entry.dump());
+    if (!entry.is_object())
+      fail(where, "must be an object {\"file_path\": ..., \"transform_matrix\": ...}, not " + entry.dump());
     const json& file_path = member(entry, "file_path", where, "the image's file name");
     where += " (" + file_path.dump() + ")";
     CaptureFrame frame;
@@ -253,7 +259,8 @@ class TransformsReader {
     check_lens(frame, where);
     PinholeCamera camera;
     if (frame.contains("camera")) {
-      if (!frame.at("camera").is_string()) fail(where, "\"camera\" must be the camera's name (a string), not " + frame.at("camera").dump());
+      if (!frame.at("camera").is_string())
+        fail(where, "\"camera\" must be the camera's name (a string), not " + frame.at("camera").dump());
       camera.name = frame.at("camera").get<std::string>();
     } else {
       char name[32];
@@ -263,8 +270,9 @@ class TransformsReader {
     const auto intrinsic = [&](const std::string& key, const Range& range) {
       const auto [value, value_where] = setting(frame, where, key);
       if (!value)
-        fail(where, "no " + quoted(key) + "; give the intrinsics w, h, fl_x, fl_y, cx, cy (in pixels) at the top level, "
-                                          "shared by all frames, or in each frame");
+        fail(where, "no " + quoted(key) +
+                        "; give the intrinsics w, h, fl_x, fl_y, cx, cy (in pixels) at the top level, "
+                        "shared by all frames, or in each frame");
       return number(*value, value_where, key, range);
     };
     camera.width = int(intrinsic("w", kPixels));
@@ -280,11 +288,13 @@ class TransformsReader {
   // glaze renders through an ideal pinhole, so distorted images cannot be compared with
   // its renders; undistorting them is the photographer's job (e.g. COLMAP's undistorter).
   void check_lens(const json& frame, const std::string& where) const {
-    const std::string remedy = "; undistort the images first (e.g. with COLMAP's image_undistorter) and describe "
-                               "them as \"camera_model\": \"PINHOLE\" without distortion coefficients";
+    const std::string remedy =
+        "; undistort the images first (e.g. with COLMAP's image_undistorter) and describe "
+        "them as \"camera_model\": \"PINHOLE\" without distortion coefficients";
     if (const auto [model, model_where] = setting(frame, where, "camera_model");
         model && *model != "PINHOLE" && *model != "OPENCV")
-      fail(model_where, "\"camera_model\" " + model->dump() + " is not supported: glaze's camera is a pinhole" + remedy);
+      fail(model_where,
+           "\"camera_model\" " + model->dump() + " is not supported: glaze's camera is a pinhole" + remedy);
     for (const char* key : kDistortion) {
       const auto [value, value_where] = setting(frame, where, key);
       if (value && number(*value, value_where, key, kFinite) != 0.0f)
@@ -304,8 +314,9 @@ class TransformsReader {
       const std::vector<float> row = numbers(rows[r], 4, where, "transform_matrix[" + std::to_string(r) + "]", kFinite);
       for (int c = 0; c < 4; ++c) m(r, c) = row[c];
     }
-    const std::string rigid = "; the pose must be a rigid camera-to-world transform (rotation and translation, "
-                              "no scale, shear or mirroring)";
+    const std::string rigid =
+        "; the pose must be a rigid camera-to-world transform (rotation and translation, "
+        "no scale, shear or mirroring)";
     if ((m.row(3) - Eigen::RowVector4f(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-4f)
       fail(where, "the last row of \"transform_matrix\" is " + rows[3].dump() + ", not [0, 0, 0, 1]" + rigid);
     const Mat3 rotation = m.topLeftCorner<3, 3>();
@@ -325,7 +336,8 @@ class TransformsReader {
     const std::string where = file_ + ": \"object\"";
     const bool gltf = object.is_object() && object.contains("gltf");
     const bool typed = object.is_object() && object.contains("type");
-    if (gltf == typed || (typed && object["type"] != "sphere")) fail(where, "must be " + shapes + ", not " + object.dump());
+    if (gltf == typed || (typed && object["type"] != "sphere"))
+      fail(where, "must be " + shapes + ", not " + object.dump());
     if (gltf) return CaptureGltf{existing_file(object["gltf"], where, "gltf")};
     const std::vector<float> center =
         numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kFinite);

@@ -32,9 +32,9 @@
 namespace glaze {
 
 struct CaptureFrame {
-  std::string file_path;   // to write: relative to the capture directory; as read: resolved
-  PinholeCamera camera;    // intrinsics and camera-to-world pose
-  std::string mask_path;   // optional; as read: resolved
+  std::string file_path;  // to write: relative to the capture directory; as read: resolved
+  PinholeCamera camera;   // intrinsics and camera-to-world pose
+  std::string mask_path;  // optional; as read: resolved
 };
 
 // What was photographed ("object"): an analytic sphere, or a glTF scene.

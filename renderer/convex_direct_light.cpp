@@ -91,7 +91,8 @@ void PathTracer::convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB
       environment_.prefetch(lobe_at[k], need_light_pdf);
       if (use_environment_samples) environment_.prefetch(light_at[k], false);
     }
-    for (int k = 0; k < kLanes; ++k) lobe_light_pdf[k] = need_light_pdf && hit[k] && k < n ? environment_.pdf(lobe_at[k]) : 0.0f;
+    for (int k = 0; k < kLanes; ++k)
+      lobe_light_pdf[k] = need_light_pdf && hit[k] && k < n ? environment_.pdf(lobe_at[k]) : 0.0f;
 
     // 6. SIMD: the weight of each lookup, the material's (material.h) per unit of Rd. The
     // mirror: F(mu_o). The environment's direction: f_d cos / pdf, times its MIS weight.

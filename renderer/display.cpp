@@ -68,9 +68,12 @@ ToneMapping parse_tone_mapping(const std::string& name) {
 
 const char* tone_mapping_name(ToneMapping mapping) {
   switch (mapping) {
-    case ToneMapping::clamp: return "clamp";
-    case ToneMapping::filmic: return "filmic";
-    case ToneMapping::aces: return "aces";
+    case ToneMapping::clamp:
+      return "clamp";
+    case ToneMapping::filmic:
+      return "filmic";
+    case ToneMapping::aces:
+      return "aces";
   }
   return "?";
 }
@@ -89,24 +92,26 @@ uint8_t srgb_encode_8bit(float value) {
 std::vector<uint8_t> display_image(const Image& image, const DisplaySettings& settings) {
   std::vector<uint8_t> out(image.pixels.size());
   const float scale = std::exp2(settings.exposure_ev);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, image.pixels.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t k = range.begin(); k < range.end(); ++k) {
-      const float linear = image.pixels[k];
-      out[k] = linear > 0.0f ? srgb_encode_8bit(tone_curve(linear * scale, settings.tone_mapping)) : 0;
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, image.pixels.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t k = range.begin(); k < range.end(); ++k) {
+          const float linear = image.pixels[k];
+          out[k] = linear > 0.0f ? srgb_encode_8bit(tone_curve(linear * scale, settings.tone_mapping)) : 0;
+        }
+      });
   return out;
 }
 
 std::vector<uint8_t> false_colour_image(std::span<const float> values, int width, int height, float low, float high,
                                         bool logarithmic) {
-  if (values.size() != size_t(width) * size_t(height)) throw Error("false colour: the values do not match the image size");
+  if (values.size() != size_t(width) * size_t(height))
+    throw Error("false colour: the values do not match the image size");
   // viridis at 0, 1/4, 1/2, 3/4 and 1.
   static constexpr std::array<std::array<float, 3>, 5> kStops = {{{0.267f, 0.005f, 0.329f},
-                                                                   {0.229f, 0.322f, 0.546f},
-                                                                   {0.128f, 0.567f, 0.551f},
-                                                                   {0.369f, 0.789f, 0.383f},
-                                                                   {0.993f, 0.906f, 0.144f}}};
+                                                                  {0.229f, 0.322f, 0.546f},
+                                                                  {0.128f, 0.567f, 0.551f},
+                                                                  {0.369f, 0.789f, 0.383f},
+                                                                  {0.993f, 0.906f, 0.144f}}};
   const float lo = logarithmic ? std::log10(low) : low, hi = logarithmic ? std::log10(high) : high;
   std::vector<uint8_t> out(values.size() * 3, 0);
   for (size_t p = 0; p < values.size(); ++p) {

@@ -32,7 +32,7 @@ ToneMapping parse_tone_mapping(const std::string& name);
 const char* tone_mapping_name(ToneMapping mapping);
 
 struct DisplaySettings {
-  float exposure_ev = 0.0f;                      // stops: each +1 doubles the radiance
+  float exposure_ev = 0.0f;  // stops: each +1 doubles the radiance
   ToneMapping tone_mapping = ToneMapping::filmic;
 };
 

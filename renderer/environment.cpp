@@ -22,8 +22,7 @@ Environment::Environment(Image radiance, const EnvironmentOptions& options, std:
   if (!to_world.allFinite() || (to_world.transpose() * to_world - Mat3::Identity()).norm() > 1e-3f ||
       to_world.determinant() <= 0.0f) {
     std::ostringstream message;
-    message << source_ << ": environment to_world must be a rotation (orthonormal, determinant +1), got\n"
-            << to_world;
+    message << source_ << ": environment to_world must be a rotation (orthonormal, determinant +1), got\n" << to_world;
     throw Error(message.str());
   }
   if (map_.width != 2 * map_.height) {
@@ -48,13 +47,9 @@ Environment Environment::load(const std::string& path, const EnvironmentOptions&
   return Environment(read_image(path), options, path);
 }
 
-Vec2 Environment::direction_to_uv(const Vec3& w) const {
-  return direction_to_latlong(local_to_world_.transpose() * w);
-}
+Vec2 Environment::direction_to_uv(const Vec3& w) const { return direction_to_latlong(local_to_world_.transpose() * w); }
 
-Vec3 Environment::uv_to_direction(const Vec2& uv) const {
-  return local_to_world_ * latlong_to_direction(uv);
-}
+Vec3 Environment::uv_to_direction(const Vec2& uv) const { return local_to_world_ * latlong_to_direction(uv); }
 
 void Environment::prefetch(const EnvironmentLookup& at, bool density) const {
   const float* texels = map_.pixels.data();
@@ -198,8 +193,7 @@ const ShCoefficients& Environment::sh(int lmax) const {
   return it->second;
 }
 
-Environment make_environment(const std::string& spec, const EnvironmentOptions& options, int width,
-                             int height) {
+Environment make_environment(const std::string& spec, const EnvironmentOptions& options, int width, int height) {
   const std::string prefix = "procedural:";
   if (spec.starts_with(prefix)) {
     const std::string name = spec.substr(prefix.size());

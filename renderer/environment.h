@@ -38,7 +38,7 @@ struct EnvironmentLookup {
   BilinearFootprint footprint;  // the map's texels eval() blends
   Vec2 uv;
   float sin_theta;
-  int texel;           // row-major index of the texel containing uv (its sampling density)
+  int texel;  // row-major index of the texel containing uv (its sampling density)
 };
 
 struct EnvironmentSample {
@@ -104,7 +104,7 @@ class Environment {
   struct Sampling {
     explicit Sampling(const Image& map);
     AliasTable texels;
-    bool tables_exact;  // texels small enough for the series
+    bool tables_exact;                          // texels small enough for the series
     std::vector<Eigen::Vector2f> row_start;     // (sin, cos) of theta = pi j / H
     std::vector<Eigen::Vector2f> column_start;  // (sin, cos) of phi = 2 pi i / W
   };
@@ -168,7 +168,7 @@ struct EnvironmentLookups {
 
 // Parses an environment specification "procedural:NAME" or a file path and builds it;
 // `resolution` (width, height) applies to procedural maps.
-Environment make_environment(const std::string& spec, const EnvironmentOptions& options = {},
-                             int width = 1024, int height = 512);
+Environment make_environment(const std::string& spec, const EnvironmentOptions& options = {}, int width = 1024,
+                             int height = 512);
 
 }  // namespace glaze

@@ -9,9 +9,7 @@ namespace glaze {
 namespace {
 
 WarningSink& sink() {
-  static WarningSink current = [](const std::string& message) {
-    std::cerr << "glaze: warning: " << message << '\n';
-  };
+  static WarningSink current = [](const std::string& message) { std::cerr << "glaze: warning: " << message << '\n'; };
   return current;
 }
 

@@ -43,12 +43,14 @@ class GltfLoader {
       }
       if (!any_root && !model_.nodes.empty()) fail("every node is some node's child: the node hierarchy has a cycle");
     } else {
-      if (scene_index >= static_cast<int>(model_.scenes.size())) fail("defaultScene " + std::to_string(scene_index) + " does not exist");
+      if (scene_index >= static_cast<int>(model_.scenes.size()))
+        fail("defaultScene " + std::to_string(scene_index) + " does not exist");
       const tinygltf::Scene& scene = model_.scenes[scene_index];
       for (int node : scene.nodes) visit_node(node, Eigen::Affine3f::Identity());
       read_scene_extras(scene.extras);
     }
-    if (scene_.meshes.empty() && scene_.spheres.empty()) fail("the scene contains no geometry (no mesh and no glaze sphere)");
+    if (scene_.meshes.empty() && scene_.spheres.empty())
+      fail("the scene contains no geometry (no mesh and no glaze sphere)");
     return std::move(scene_);
   }
 
@@ -115,8 +117,9 @@ class GltfLoader {
         material.Rd = RGB(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
       if (pbr.baseColorTexture.index >= 0) material.texture = texture(pbr.baseColorTexture.index, what);
       if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor > 0.0) {
-        warn(path_ + ": " + what + " has metallicFactor " + std::to_string(pbr.metallicFactor) + " and roughnessFactor " +
-             std::to_string(pbr.roughnessFactor) + "; glaze's coat is a perfect dielectric mirror over a diffuse base, "
+        warn(path_ + ": " + what + " has metallicFactor " + std::to_string(pbr.metallicFactor) +
+             " and roughnessFactor " + std::to_string(pbr.roughnessFactor) +
+             "; glaze's coat is a perfect dielectric mirror over a diffuse base, "
              "so both are ignored (set them to 0 to silence this)");
       }
       if (const auto it = source.extensions.find("KHR_materials_ior"); it != source.extensions.end()) {
@@ -166,8 +169,9 @@ class GltfLoader {
         ++clamped;
       }
     }
-    if (clamped) warn(path_ + ": texture " + texture.source + ": " + std::to_string(clamped) +
-                      " values outside [0, 1] clamped (Rd is a reflectance)");
+    if (clamped)
+      warn(path_ + ": texture " + texture.source + ": " + std::to_string(clamped) +
+           " values outside [0, 1] clamped (Rd is a reflectance)");
     scene_.textures.push_back(std::move(texture));
     return texture_of_image_[source] = static_cast<int>(scene_.textures.size()) - 1;
   }
@@ -195,7 +199,8 @@ class GltfLoader {
   }
 
   void visit_node(int index, const Eigen::Affine3f& parent) {
-    if (index < 0 || index >= static_cast<int>(model_.nodes.size())) fail("node index " + std::to_string(index) + " does not exist");
+    if (index < 0 || index >= static_cast<int>(model_.nodes.size()))
+      fail("node index " + std::to_string(index) + " does not exist");
     if (!on_path_.insert(index).second)
       fail("node " + std::to_string(index) + " is its own ancestor (the node hierarchy has a cycle)");
     const tinygltf::Node& node = model_.nodes[index];
@@ -212,9 +217,11 @@ class GltfLoader {
   }
 
   void add_camera(int index, const Eigen::Affine3f& world, const std::string& what) {
-    if (index >= static_cast<int>(model_.cameras.size())) fail(what + ": camera " + std::to_string(index) + " does not exist");
+    if (index >= static_cast<int>(model_.cameras.size()))
+      fail(what + ": camera " + std::to_string(index) + " does not exist");
     const tinygltf::Camera& camera = model_.cameras[index];
-    if (camera.type != "perspective") fail(what + ": camera type '" + camera.type + "' is not supported (only perspective)");
+    if (camera.type != "perspective")
+      fail(what + ": camera type '" + camera.type + "' is not supported (only perspective)");
     // Keep the rigid part of the pose: scale in the hierarchy must not skew the rays.
     Eigen::Affine3f pose = Eigen::Affine3f::Identity();
     pose.linear() = world.rotation();
@@ -237,7 +244,8 @@ class GltfLoader {
       fail(what + ": a glaze sphere's node must not be scaled non-uniformly");
     if (!(r * s0 > 0.0f)) fail(what + ": sphere radius must be positive");
     const int material_number = material ? int(number(*material, what + " sphere material")) : -1;
-    scene_.spheres.push_back({what, world.translation(), r * s0, material_index(material_number, what), world.rotation()});
+    scene_.spheres.push_back(
+        {what, world.translation(), r * s0, material_index(material_number, what), world.rotation()});
   }
 
   int material_index(int index, const std::string& what) {
@@ -258,15 +266,26 @@ class GltfLoader {
   std::vector<float> read_floats(int index, int components, const std::string& what) const {
     const tinygltf::Accessor& accessor = accessor_at(index, what);
     if (tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type)) != components)
-      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (expected " + std::to_string(components) + " components)");
+      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (expected " +
+           std::to_string(components) + " components)");
     std::vector<float> values(accessor.count * components);
     for_each_component(accessor, what, [&](size_t element, int component, const unsigned char* p) {
       float v = 0.0f;
       switch (accessor.componentType) {
-        case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *p / 255.0f; break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, p, 2); v = s / 65535.0f; break; }
-        default: fail(what + ": accessor " + std::to_string(index) + " has an unsupported component type");
+        case TINYGLTF_COMPONENT_TYPE_FLOAT:
+          std::memcpy(&v, p, 4);
+          break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+          v = *p / 255.0f;
+          break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          uint16_t s;
+          std::memcpy(&s, p, 2);
+          v = s / 65535.0f;
+          break;
+        }
+        default:
+          fail(what + ": accessor " + std::to_string(index) + " has an unsupported component type");
       }
       if (!std::isfinite(v)) fail(what + ": accessor " + std::to_string(index) + " contains a non-finite value");
       values[element * components + component] = v;
@@ -280,10 +299,20 @@ class GltfLoader {
     std::vector<uint32_t> indices(accessor.count);
     for_each_component(accessor, what, [&](size_t element, int, const unsigned char* p) {
       switch (accessor.componentType) {
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: indices[element] = *p; break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t s; std::memcpy(&s, p, 2); indices[element] = s; break; }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&indices[element], p, 4); break;
-        default: fail(what + ": index accessor has an unsupported component type");
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+          indices[element] = *p;
+          break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          uint16_t s;
+          std::memcpy(&s, p, 2);
+          indices[element] = s;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+          std::memcpy(&indices[element], p, 4);
+          break;
+        default:
+          fail(what + ": index accessor has an unsupported component type");
       }
     });
     return indices;
@@ -303,7 +332,8 @@ class GltfLoader {
       fail(what + ": accessor refers to bufferView " + std::to_string(accessor.bufferView) + ", which does not exist");
     const tinygltf::BufferView& view = model_.bufferViews[accessor.bufferView];
     if (view.buffer < 0 || view.buffer >= static_cast<int>(model_.buffers.size()))
-      fail(what + ": bufferView " + std::to_string(accessor.bufferView) + " refers to buffer " + std::to_string(view.buffer) + ", which does not exist");
+      fail(what + ": bufferView " + std::to_string(accessor.bufferView) + " refers to buffer " +
+           std::to_string(view.buffer) + ", which does not exist");
     const std::vector<unsigned char>& data = model_.buffers[view.buffer].data;
     const int stride = accessor.ByteStride(view);
     const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(accessor.componentType));
@@ -322,7 +352,8 @@ class GltfLoader {
   }
 
   void add_mesh(int index, const Eigen::Affine3f& world, const std::string& node_what) {
-    if (index >= static_cast<int>(model_.meshes.size())) fail(node_what + ": mesh " + std::to_string(index) + " does not exist");
+    if (index >= static_cast<int>(model_.meshes.size()))
+      fail(node_what + ": mesh " + std::to_string(index) + " does not exist");
     const tinygltf::Mesh& mesh = model_.meshes[index];
     const Eigen::Matrix3f normal_matrix = world.linear().inverse().transpose();
     if (!normal_matrix.allFinite()) fail(node_what + ": transform is singular");
@@ -349,16 +380,20 @@ class GltfLoader {
       } else {
         for (uint32_t v = 0; v < vertex_count; ++v) indices.push_back(v);
       }
-      if (indices.size() % 3 != 0) fail(what + ": index count " + std::to_string(indices.size()) + " is not a multiple of 3");
+      if (indices.size() % 3 != 0)
+        fail(what + ": index count " + std::to_string(indices.size()) + " is not a multiple of 3");
       // A transform with negative determinant mirrors the mesh, which reverses the
       // winding (glTF 2.0 §3.7.4); swapping two corners keeps faces facing outwards.
       const bool mirrored = world.linear().determinant() < 0.0f;
       for (size_t t = 0; t < indices.size(); t += 3) {
         for (int k = 0; k < 3; ++k)
           if (indices[t + k] >= vertex_count)
-            fail(what + ": index " + std::to_string(indices[t + k]) + " is out of range (" + std::to_string(vertex_count) + " vertices)");
-        if (mirrored) out.triangles.push_back({indices[t], indices[t + 2], indices[t + 1]});
-        else out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
+            fail(what + ": index " + std::to_string(indices[t + k]) + " is out of range (" +
+                 std::to_string(vertex_count) + " vertices)");
+        if (mirrored)
+          out.triangles.push_back({indices[t], indices[t + 2], indices[t + 1]});
+        else
+          out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
       }
       if (const auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
         const std::vector<float> normals = read_floats(normal->second, 3, what + " NORMAL");
@@ -386,7 +421,8 @@ class GltfLoader {
   static void generate_smooth_normals(TriangleMesh& mesh) {
     mesh.normals.assign(mesh.positions.size(), Vec3::Zero());
     for (const auto& t : mesh.triangles) {
-      const Vec3 face = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      const Vec3 face =
+          (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
       for (uint32_t v : t) mesh.normals[v] += face;  // |face| = twice the area
     }
     for (Vec3& n : mesh.normals) n = n.norm() > 0.0f ? n.normalized() : Vec3(0, 1, 0);
@@ -400,7 +436,8 @@ class GltfLoader {
       const Value* h = member(*film, "height");
       if (!w || !h) fail("scene extras.glaze.film needs width and height");
       const double width = number(*w, "film width"), height = number(*h, "film height");
-      if (width < 1 || height < 1 || width > 65536 || height > 65536 || width != std::floor(width) || height != std::floor(height))
+      if (width < 1 || height < 1 || width > 65536 || height > 65536 || width != std::floor(width) ||
+          height != std::floor(height))
         fail("scene extras.glaze.film must be whole numbers of pixels in [1, 65536]");
       scene_.film = std::pair{int(width), int(height)};
     }
@@ -418,7 +455,8 @@ class GltfLoader {
       } else {
         fail("scene extras.glaze.environment needs \"file\" or \"procedural\"");
       }
-      if (const Value* scale = member(*environment, "scale")) spec.options.scale = float(number(*scale, "environment scale"));
+      if (const Value* scale = member(*environment, "scale"))
+        spec.options.scale = float(number(*scale, "environment scale"));
       if (const Value* rotation = member(*environment, "rotation"))
         spec.options.rotation_degrees = float(number(*rotation, "environment rotation"));
       if (const Value* to_world = member(*environment, "to_world")) {

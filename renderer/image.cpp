@@ -25,12 +25,13 @@ namespace {
 Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float>* alpha) {
   const OIIO::ImageSpec& spec = input.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-    throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" +
-                std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) + " channels)");
+    throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                ", " + std::to_string(spec.nchannels) + " channels)");
   constexpr int64_t kMaxPixels = int64_t(1) << 28;  // 16k x 16k: far beyond any map glaze needs
   if (int64_t(spec.width) * spec.height > kMaxPixels || spec.nchannels > 64)
     throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
-                std::to_string(spec.nchannels) + " channels, larger than glaze accepts (at most 2^28 pixels); "
+                std::to_string(spec.nchannels) +
+                " channels, larger than glaze accepts (at most 2^28 pixels); "
                 "is the file corrupt?");
   const int channels = spec.nchannels;
   std::vector<float> raw(size_t(spec.width) * spec.height * channels);
@@ -42,10 +43,9 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
   // Integer images (PNG, JPEG, 8-bit TIFF, ...) store sRGB-encoded values unless the
   // file says it is linear; float images (EXR, HDR, PFM) are linear already.
   const std::string color_space = spec.get_string_attribute("oiio:ColorSpace");
-  const bool integer_format = spec.format.basetype == OIIO::TypeDesc::UINT8 ||
-                              spec.format.basetype == OIIO::TypeDesc::UINT16 ||
-                              spec.format.basetype == OIIO::TypeDesc::INT8 ||
-                              spec.format.basetype == OIIO::TypeDesc::INT16;
+  const bool integer_format =
+      spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::UINT16 ||
+      spec.format.basetype == OIIO::TypeDesc::INT8 || spec.format.basetype == OIIO::TypeDesc::INT16;
   const bool srgb_encoded = integer_format && !OIIO::Strutil::iequals(color_space, "linear");
 
   Image image(spec.width, spec.height);
@@ -128,8 +128,8 @@ void write_atomically(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeD
 
 }  // namespace
 
-void write_image(const std::string& path, const Image& image,
-                 const std::map<std::string, std::string>& metadata, std::span<const float> alpha) {
+void write_image(const std::string& path, const Image& image, const std::map<std::string, std::string>& metadata,
+                 std::span<const float> alpha) {
   if (image.width <= 0 || image.height <= 0) throw Error(path + ": refusing to write an empty image");
   const size_t pixels = size_t(image.width) * image.height;
   if (!alpha.empty() && alpha.size() != pixels) throw Error(path + ": the alpha channel does not match the image size");
@@ -144,7 +144,8 @@ void write_image(const std::string& path, const Image& image,
   }
   OIIO::ImageSpec spec(image.width, image.height, channels, OIIO::TypeDesc::FLOAT);
   if (channels == 4) spec.alpha_channel = 3;
-  write_atomically(path, spec, OIIO::TypeDesc::FLOAT, alpha.empty() ? image.pixels.data() : interleaved.data(), metadata);
+  write_atomically(path, spec, OIIO::TypeDesc::FLOAT, alpha.empty() ? image.pixels.data() : interleaved.data(),
+                   metadata);
 }
 
 void write_picture(const std::string& path, int width, int height, std::span<const uint8_t> srgb,

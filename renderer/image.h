@@ -51,8 +51,8 @@ float srgb_to_linear(float encoded);
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.
 // `alpha`, if given (one value per pixel), is written as a fourth channel.
-void write_image(const std::string& path, const Image& image,
-                 const std::map<std::string, std::string>& metadata = {}, std::span<const float> alpha = {});
+void write_image(const std::string& path, const Image& image, const std::map<std::string, std::string>& metadata = {},
+                 std::span<const float> alpha = {});
 
 // Writes an 8-bit sRGB picture (row-major, 3 bytes a pixel; display.h makes them),
 // tagged sRGB, atomically. Throws glaze::Error on failure.

@@ -32,8 +32,8 @@ std::vector<uint8_t> interior_mask(const RayTracer& tracer, const PinholeCamera&
 
 ImageError image_error(const Image& image, const Image& reference, std::span<const uint8_t> mask) {
   if (image.width != reference.width || image.height != reference.height)
-    throw Error("image is " + std::to_string(image.width) + "x" + std::to_string(image.height) + " but the reference is " +
-                std::to_string(reference.width) + "x" + std::to_string(reference.height));
+    throw Error("image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                " but the reference is " + std::to_string(reference.width) + "x" + std::to_string(reference.height));
   if (mask.size() != size_t(image.width) * image.height) throw Error("mask does not match the image size");
   double squared = 0.0, reference_sum = 0.0, largest = 0.0;  // reference_sum: of squares
   size_t pixels = 0;

@@ -21,8 +21,8 @@ void check_in_bounds(MaterialParameter id, float value) {
   const ParameterSpec& spec = parameter_spec(id);
   if (!(value >= spec.lower && value <= spec.upper)) {  // also rejects NaN
     std::ostringstream message;
-    message << "material parameter " << spec.name << " = " << value << " is outside ["
-            << spec.lower << ", " << spec.upper << "] (" << spec.description << ")";
+    message << "material parameter " << spec.name << " = " << value << " is outside [" << spec.lower << ", "
+            << spec.upper << "] (" << spec.description << ")";
     throw Error(message.str());
   }
 }
@@ -31,8 +31,7 @@ void check_in_bounds(MaterialParameter id, float value) {
 // (21/10) (5/3 mu^3 - 5/2 mu^4 + 2 mu^5 - 5/6 mu^6 + 1/7 mu^7), with its derivative.
 double diffuse_lobe_cdf(double mu, double* density) {
   *density = 2.1 * mu * coat_transmittance_g(mu);
-  return 2.1 * mu * mu * mu *
-         (5.0 / 3.0 + mu * (-2.5 + mu * (2.0 + mu * (-5.0 / 6.0 + mu * (1.0 / 7.0)))));
+  return 2.1 * mu * mu * mu * (5.0 / 3.0 + mu * (-2.5 + mu * (2.0 + mu * (-5.0 / 6.0 + mu * (1.0 / 7.0)))));
 }
 
 // Solves C(mu) = target on [low, high] (which must bracket the root) from the guess mu,
@@ -41,7 +40,10 @@ double invert_diffuse_lobe_cdf(double target, double mu, double low, double high
   for (int iteration = 0; iteration < 50; ++iteration) {
     double density = 0.0;
     const double error = diffuse_lobe_cdf(mu, &density) - target;
-    if (error > 0.0) high = mu; else low = mu;
+    if (error > 0.0)
+      high = mu;
+    else
+      low = mu;
     double next = density > 0.0 ? mu - error / density : 0.5 * (low + high);
     if (!(next > low && next < high)) next = 0.5 * (low + high);
     const bool converged = std::abs(next - mu) < 1e-10;
@@ -134,16 +136,14 @@ float PolishedMaterial::specular_probability(const Vec3& wo) const {
   return total > 0.0f ? specular / total : 0.0f;
 }
 
-std::optional<MaterialSample> PolishedMaterial::sample(const Vec3& wo, float u_lobe,
-                                                       const Vec2& u) const {
+std::optional<MaterialSample> PolishedMaterial::sample(const Vec3& wo, float u_lobe, const Vec2& u) const {
   if (!(wo.z() > 0.0f)) return std::nullopt;
   const float mu_o = wo.z();
   const float specular = fresnel(mu_o);
   if (specular <= 0.0f && (Rd_ <= 0.0f).all()) return std::nullopt;  // reflects nothing
   const float p_specular = specular_probability(wo);
   if (u_lobe < p_specular) {
-    return MaterialSample{Vec3(-wo.x(), -wo.y(), wo.z()), RGB::Constant(specular / p_specular),
-                          p_specular, true};
+    return MaterialSample{Vec3(-wo.x(), -wo.y(), wo.z()), RGB::Constant(specular / p_specular), p_specular, true};
   }
   MaterialSample diffuse = *sample_diffuse(wo, u);
   const float p_diffuse = 1.0f - p_specular;

@@ -49,8 +49,7 @@ inline constexpr double kDiffuseNormalisation = 21.0 / (20.0 * std::numbers::pi)
 // The scalar part of f_d: f_d = Rd * diffuse_factor(R0, mu_i, mu_o).
 template <typename T, typename S>
 T diffuse_factor(T R0, S mu_i, S mu_o) {
-  return T(kDiffuseNormalisation) * (T(1) - R0) * coat_transmittance_g(mu_i) *
-         coat_transmittance_g(mu_o);
+  return T(kDiffuseNormalisation) * (T(1) - R0) * coat_transmittance_g(mu_i) * coat_transmittance_g(mu_o);
 }
 
 // --- Parameter registry (Mitsuba-style): the one list forward and inverse code share. ---
@@ -59,10 +58,10 @@ enum class MaterialParameter { R0, Rd };
 
 struct ParameterSpec {
   MaterialParameter id;
-  std::string_view name;         // as in glTF extras, fit.json and the command line
-  int dimension;                 // 1 = scalar, 3 = RGB
-  double lower, upper;           // physical bounds, used by the fits
-  double default_value;          // per component
+  std::string_view name;  // as in glTF extras, fit.json and the command line
+  int dimension;          // 1 = scalar, 3 = RGB
+  double lower, upper;    // physical bounds, used by the fits
+  double default_value;   // per component
   std::string_view description;
 };
 
@@ -77,10 +76,10 @@ const ParameterSpec& parameter_spec(MaterialParameter id);
 // --- The material as a BSDF for the path tracer. ---
 
 struct MaterialSample {
-  Vec3 wi;             // sampled incident direction (local frame)
-  RGB weight;          // f * cos(theta_i) / pdf, including the lobe-selection probability
-  float pdf;           // solid-angle density of wi; for the mirror, the selection probability
-  bool is_specular;    // true: wi is the mirror direction (a delta lobe)
+  Vec3 wi;           // sampled incident direction (local frame)
+  RGB weight;        // f * cos(theta_i) / pdf, including the lobe-selection probability
+  float pdf;         // solid-angle density of wi; for the mirror, the selection probability
+  bool is_specular;  // true: wi is the mirror direction (a delta lobe)
 };
 
 class PolishedMaterial {

@@ -43,9 +43,13 @@ inline float fast_atan2(float y, float x) {
   const float largest = std::max(ax, ay), smallest = std::min(ax, ay);
   const float a = largest > 0.0f ? smallest / largest : 0.0f;
   const float z = a * a;
-  float r = a * (0.99999987116f + z * (-0.33332524003f + z * (0.19984884686f + z * (-0.14154806042f +
-                 z * (0.10477539199f + z * (-0.071943845424f + z * (0.039345413147f +
-                 z * (-0.014152348036f + z * 0.0023981390124f))))))));
+  float r = a * (0.99999987116f +
+                 z * (-0.33332524003f +
+                      z * (0.19984884686f +
+                           z * (-0.14154806042f +
+                                z * (0.10477539199f +
+                                     z * (-0.071943845424f +
+                                          z * (0.039345413147f + z * (-0.014152348036f + z * 0.0023981390124f))))))));
   r = ay > ax ? 0.5f * kPi - r : r;
   r = std::signbit(x) ? kPi - r : r;
   return std::copysign(r, y);
@@ -78,8 +82,8 @@ struct Frame {
     const float sign = std::copysign(1.0f, n.z());
     const float a = -1.0f / (sign + n.z());
     const float b = n.x() * n.y() * a;
-    return {Vec3(1.0f + sign * n.x() * n.x() * a, sign * b, -sign * n.x()),
-            Vec3(b, sign + n.y() * n.y() * a, -n.y()), n};
+    return {Vec3(1.0f + sign * n.x() * n.x() * a, sign * b, -sign * n.x()), Vec3(b, sign + n.y() * n.y() * a, -n.y()),
+            n};
   }
   Vec3 to_local(const Vec3& v) const { return {v.dot(s), v.dot(t), v.dot(n)}; }
   Vec3 to_world(const Vec3& v) const { return s * v.x() + t * v.y() + n * v.z(); }

@@ -29,11 +29,11 @@ enum class DirectLightEstimator { mis, bsdf, environment };
 DirectLightEstimator parse_direct_light_estimator(const std::string& name);
 
 struct PathTracerOptions {
-  int max_depth = 8;                 // surface interactions along a path; 1 = direct light only
-  int russian_roulette_depth = 3;    // first bounce at which paths may be terminated
+  int max_depth = 8;               // surface interactions along a path; 1 = direct light only
+  int russian_roulette_depth = 3;  // first bounce at which paths may be terminated
   DirectLightEstimator estimator = DirectLightEstimator::mis;
-  bool black_background = false;     // camera rays that miss return 0 (capture sets)
-  bool convex_shortcut = true;       // use the single-convex-object estimator where it applies
+  bool black_background = false;  // camera rays that miss return 0 (capture sets)
+  bool convex_shortcut = true;    // use the single-convex-object estimator where it applies
 };
 
 class PathTracer {

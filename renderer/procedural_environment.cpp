@@ -57,15 +57,14 @@ RGB office(const Vec3& d) {
       for (int ix = 0; ix < 6; ++ix) {
         for (int iz = 0; iz < 4; ++iz) {
           const float cx = -3.75f + 1.5f * ix, cz = -3.0f + 2.0f * iz;
-          if (inside(p.x(), cx - 0.3f, cx + 0.3f) && inside(p.z(), cz - 0.6f, cz + 0.6f))
-            return {26.0f, 25.0f, 22.0f};
+          if (inside(p.x(), cx - 0.3f, cx + 0.3f) && inside(p.z(), cz - 0.6f, cz + 0.6f)) return {26.0f, 25.0f, 22.0f};
         }
       }
       return {0.42f, 0.42f, 0.40f};
     }
     case Room::Face::floor: {
-      const bool dark_tile = (static_cast<int>(std::floor(p.x() / 0.5f)) +
-                              static_cast<int>(std::floor(p.z() / 0.5f))) % 2 != 0;
+      const bool dark_tile =
+          (static_cast<int>(std::floor(p.x() / 0.5f)) + static_cast<int>(std::floor(p.z() / 0.5f))) % 2 != 0;
       return RGB(0.24f, 0.18f, 0.12f) * (dark_tile ? 0.85f : 1.15f);
     }
     case Room::Face::wall_negative_z:  // window: overcast sky, brighter towards the top
@@ -111,8 +110,8 @@ const std::vector<std::string>& procedural_environment_names() {
 
 Image make_procedural_environment(const std::string& name, int width, int height) {
   if (width <= 0 || height <= 0) {
-    throw Error("procedural environment '" + name + "': resolution must be positive, got " +
-                std::to_string(width) + "x" + std::to_string(height));
+    throw Error("procedural environment '" + name + "': resolution must be positive, got " + std::to_string(width) +
+                "x" + std::to_string(height));
   }
   std::function<RGB(const Vec3&)> radiance;
   if (name == "constant") {

@@ -12,7 +12,8 @@ namespace {
 
 void check_device(RTCDevice device, const char* what) {
   const RTCError error = rtcGetDeviceError(device);
-  if (error != RTC_ERROR_NONE) throw Error(std::string("Embree failed to ") + what + " (error " + std::to_string(int(error)) + ")");
+  if (error != RTC_ERROR_NONE)
+    throw Error(std::string("Embree failed to ") + what + " (error " + std::to_string(int(error)) + ")");
 }
 
 // The outward normal, unnormalised, at distance t along the ray: p - c, in double.
@@ -159,8 +160,9 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
     hit.geometric_normal = geometric_normal.normalized();
     const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
     hit.normal = shading.norm() > 0.0f ? shading.normalized() : hit.geometric_normal;
-    hit.uv = mesh.uvs.empty() || !texture_coordinates ? Vec2::Zero()
-                                                      : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
+    hit.uv = mesh.uvs.empty() || !texture_coordinates
+                 ? Vec2::Zero()
+                 : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
     hit.material = mesh.material;
   }
   if (hit.geometric_normal.dot(ray.direction) > 0.0f) {  // two-sided: face the viewer
@@ -179,7 +181,8 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool tex
         out.material[k] = out.material[count - 1], out.uv[k] = out.uv[count - 1];
         continue;
       }
-      const std::optional<SurfaceHit> hit = intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
+      const std::optional<SurfaceHit> hit =
+          intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
       out.hit[k] = hit ? 1 : 0;
       out.normal.set(k, hit ? hit->normal : Vec3::UnitZ());
       out.material[k] = hit ? hit->material : 0;

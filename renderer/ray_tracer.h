@@ -21,11 +21,11 @@
 namespace glaze {
 
 struct SurfaceHit {
-  float distance;          // along the (unit) ray direction
+  float distance;  // along the (unit) ray direction
   Vec3 position;
-  Vec3 normal;             // shading normal, unit, facing the ray's origin side
-  Vec3 geometric_normal;   // unit, facing the ray's origin side
-  Vec2 uv;                 // texture coordinate (0, 0 if the mesh has none)
+  Vec3 normal;            // shading normal, unit, facing the ray's origin side
+  Vec3 geometric_normal;  // unit, facing the ray's origin side
+  Vec2 uv;                // texture coordinate (0, 0 if the mesh has none)
   int material;
 };
 
@@ -33,10 +33,10 @@ struct SurfaceHit {
 // need only the surface's orientation: where hit[k] is 0 the other fields are finite
 // but meaningless.
 struct SurfaceHits {
-  Directions normal;               // shading normal, unit, facing the ray's origin side
-  alignas(64) int hit[kLanes];     // 1 where the ray hit (an int, to vectorise with floats)
+  Directions normal;            // shading normal, unit, facing the ray's origin side
+  alignas(64) int hit[kLanes];  // 1 where the ray hit (an int, to vectorise with floats)
   int material[kLanes];
-  Vec2 uv[kLanes];                 // texture coordinate, if asked for (else 0, 0)
+  Vec2 uv[kLanes];  // texture coordinate, if asked for (else 0, 0)
 };
 
 class RayTracer {
@@ -59,9 +59,7 @@ class RayTracer {
 
   // How far to move a ray's origin off a surface at `position` so that it does not hit
   // that surface again: a few float ulps of the coordinates' magnitude.
-  static float ray_offset(const Vec3& position) {
-    return 1e-5f * std::max(1.0f, position.cwiseAbs().maxCoeff());
-  }
+  static float ray_offset(const Vec3& position) { return 1e-5f * std::max(1.0f, position.cwiseAbs().maxCoeff()); }
 
  private:
   const Scene& scene_;

@@ -28,11 +28,11 @@
 namespace glaze {
 
 struct RenderOptions {
-  int spp = 64;                 // samples per pixel (per pass when time_budget > 0)
-  double time_budget = 0.0;     // seconds; > 0: render passes of `spp` until it is spent
+  int spp = 64;              // samples per pixel (per pass when time_budget > 0)
+  double time_budget = 0.0;  // seconds; > 0: render passes of `spp` until it is spent
   uint64_t seed = 0;
-  int threads = 0;              // 0: all cores
-  bool progress = false;        // a progress bar on stderr
+  int threads = 0;        // 0: all cores
+  bool progress = false;  // a progress bar on stderr
   // Every sample through the pixel centre: no anti-aliasing, a point-sampled image (what
   // the sh integrator renders at ss 1), to compare shading models without pixel filtering.
   bool pixel_centres = false;
@@ -40,7 +40,7 @@ struct RenderOptions {
 
 struct RenderResult {
   Image image;
-  int spp = 0;          // samples per pixel actually taken
+  int spp = 0;  // samples per pixel actually taken
   double seconds = 0.0;
 };
 
@@ -83,10 +83,10 @@ class ProgressiveRender {
   uint64_t camera_index_;
   tbb::task_arena arena_;
   int passes_ = 0;
-  std::vector<double> sum_;              // width * height * 3
-  std::vector<double> luminance_sum_;    // per pixel: sum over passes of the pass mean's luminance
-  std::vector<double> luminance_sq_sum_; // ... and of its square
-  std::vector<double> pass_;             // the pass being rendered: its per-pixel sums
+  std::vector<double> sum_;               // width * height * 3
+  std::vector<double> luminance_sum_;     // per pixel: sum over passes of the pass mean's luminance
+  std::vector<double> luminance_sq_sum_;  // ... and of its square
+  std::vector<double> pass_;              // the pass being rendered: its per-pixel sums
 };
 
 // render() as an Integrator: the path tracer of `scene` under `environment` with

@@ -45,7 +45,7 @@ struct Sphere {
 struct CameraSpec {
   std::string name;
   Eigen::Affine3f camera_to_world;
-  float yfov;          // radians
+  float yfov;           // radians
   float aspect = 0.0f;  // width / height, 0 if the file does not say
 };
 

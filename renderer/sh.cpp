@@ -42,8 +42,7 @@ const LegendreTable& legendre_table() {
 
 void check_lmax(int lmax) {
   if (lmax < 0 || lmax > kShMaxLmax)
-    throw Error("SH band limit lmax = " + std::to_string(lmax) + " is outside [0, " +
-                std::to_string(kShMaxLmax) + "]");
+    throw Error("SH band limit lmax = " + std::to_string(lmax) + " is outside [0, " + std::to_string(kShMaxLmax) + "]");
 }
 
 }  // namespace detail
@@ -97,8 +96,7 @@ ShCoefficients::ShCoefficients(int lmax_) : lmax(lmax_) {
 
 RGB ShCoefficients::eval(const Vec3& d) const {
   RGBd sum = RGBd::Zero();
-  for_each_sh(lmax, double(d.x()), double(d.y()), double(d.z()),
-              [&](int i, double y) { sum += y * values[i]; });
+  for_each_sh(lmax, double(d.x()), double(d.y()), double(d.z()), [&](int i, double y) { sum += y * values[i]; });
   return sum.cast<float>();
 }
 
@@ -132,14 +130,12 @@ ShCoefficients sh_rotate(const ShCoefficients& coefficients, const Mat3d& rotati
     const Vec3d& w = directions[k];
     const Vec3d w_turned = rotation.transpose() * w;
     for_each_sh(lmax, w.x(), w.y(), w.z(), [&](int i, double y) { basis(k, i) = y; });
-    for_each_sh(lmax, w_turned.x(), w_turned.y(), w_turned.z(),
-                [&](int i, double y) { turned(k, i) = y; });
+    for_each_sh(lmax, w_turned.x(), w_turned.y(), w_turned.z(), [&](int i, double y) { turned(k, i) = y; });
   }
   for (int l = 0; l <= lmax; ++l) {
     const int first = sh_index(l, -l), size = 2 * l + 1;
-    const Eigen::MatrixXd band_matrix = basis.middleCols(first, size)
-                                            .colPivHouseholderQr()
-                                            .solve(turned.middleCols(first, size));
+    const Eigen::MatrixXd band_matrix =
+        basis.middleCols(first, size).colPivHouseholderQr().solve(turned.middleCols(first, size));
     for (int c = 0; c < 3; ++c) {
       Eigen::VectorXd band(size);
       for (int i = 0; i < size; ++i) band[i] = coefficients.values[first + i][c];
@@ -197,8 +193,7 @@ ShCoefficients sh_project_latlong(const Image& map, const Mat3& local_to_world, 
       for (size_t q = 0; q < unit_rule.nodes.size(); ++q) {
         const double theta = theta_low + (theta_high - theta_low) * unit_rule.nodes[q];
         const double weight = (theta_high - theta_low) * unit_rule.weights[q] * std::sin(theta);
-        for_each_sh(lmax, std::sin(theta), 0.0, std::cos(theta),
-                    [&](int i, double y) { row_factor[i] += weight * y; });
+        for_each_sh(lmax, std::sin(theta), 0.0, std::cos(theta), [&](int i, double y) { row_factor[i] += weight * y; });
       }
       std::fill(sum_cos.begin(), sum_cos.end(), RGBd::Zero());
       std::fill(sum_sin.begin(), sum_sin.end(), RGBd::Zero());
@@ -245,13 +240,32 @@ template <typename T>
 std::array<T, 25> low_band_polynomials(T x, T y, T z) {
   const T z2 = z * z, xy = x * y, re2 = x * x - y * y;
   const T re3 = x * re2 - y * (2 * xy), im3 = y * re2 + x * (2 * xy);  // (x + i y)^3
-  const T re4 = x * re3 - y * im3, im4 = y * re3 + x * im3;          // (x + i y)^4
+  const T re4 = x * re3 - y * im3, im4 = y * re3 + x * im3;            // (x + i y)^4
   return {T(1),
-          y, z, x,
-          xy, y * z, 3 * z2 - 1, x * z, re2,
-          im3, xy * z, y * (5 * z2 - 1), z * (5 * z2 - 3), x * (5 * z2 - 1), z * re2, re3,
-          im4, z * im3, xy * (7 * z2 - 1), y * z * (7 * z2 - 3), (35 * z2 - 30) * z2 + 3, x * z * (7 * z2 - 3),
-          re2 * (7 * z2 - 1), z * re3, re4};
+          y,
+          z,
+          x,
+          xy,
+          y * z,
+          3 * z2 - 1,
+          x * z,
+          re2,
+          im3,
+          xy * z,
+          y * (5 * z2 - 1),
+          z * (5 * z2 - 3),
+          x * (5 * z2 - 1),
+          z * re2,
+          re3,
+          im4,
+          z * im3,
+          xy * (7 * z2 - 1),
+          y * z * (7 * z2 - 3),
+          (35 * z2 - 30) * z2 + 3,
+          x * z * (7 * z2 - 3),
+          re2 * (7 * z2 - 1),
+          z * re3,
+          re4};
 }
 
 }  // namespace
@@ -275,7 +289,8 @@ ShDiffuseSum::ShDiffuseSum(const ShCoefficients& lighting)
       const double factor = sh_lambda(l) * sh_kernel_coefficient(l);
       for (int m = -l; m <= l; ++m) {
         const int i = sh_index(l, m);
-        for (int c = 0; c < 3; ++c) low_band_[c][i] = static_cast<float>(factor * lighting(l, m)[c] * basis[i] / shape[i]);
+        for (int c = 0; c < 3; ++c)
+          low_band_[c][i] = static_cast<float>(factor * lighting(l, m)[c] * basis[i] / shape[i]);
       }
     }
   }
@@ -303,7 +318,8 @@ RGB ShDiffuseSum::sum(Lmax lmax, const Vec3& n) const {
   for_each_sh(lmax, n.x(), n.y(), n.z(), [&](int i, float y) { basis[i] = y; });
   const Eigen::Map<const Eigen::VectorXf> y(basis, count);
   RGB result;
-  for (int c = 0; c < 3; ++c) result[c] = y.dot(Eigen::Map<const Eigen::VectorXf>(&weighted_[size_t(c) * count], count));
+  for (int c = 0; c < 3; ++c)
+    result[c] = y.dot(Eigen::Map<const Eigen::VectorXf>(&weighted_[size_t(c) * count], count));
   return result;
 }
 
@@ -317,12 +333,18 @@ using FloatLanes = std::experimental::native_simd<float>;
 template <typename Sum>
 decltype(auto) with_band_limit(int lmax, Sum&& sum) {
   switch (lmax) {
-    case 4: return sum(std::integral_constant<int, 4>());
-    case 6: return sum(std::integral_constant<int, 6>());
-    case 8: return sum(std::integral_constant<int, 8>());
-    case 12: return sum(std::integral_constant<int, 12>());
-    case 16: return sum(std::integral_constant<int, 16>());
-    default: return sum(lmax);
+    case 4:
+      return sum(std::integral_constant<int, 4>());
+    case 6:
+      return sum(std::integral_constant<int, 6>());
+    case 8:
+      return sum(std::integral_constant<int, 8>());
+    case 12:
+      return sum(std::integral_constant<int, 12>());
+    case 16:
+      return sum(std::integral_constant<int, 16>());
+    default:
+      return sum(lmax);
   }
 }
 
@@ -344,7 +366,8 @@ void sh_sum_lanes(Lmax lmax, std::span<const Vec3> directions, std::span<const f
   for (size_t first = 0; first < directions.size(); first += FloatLanes::size()) {
     // Lanes past the end count 0 times.
     const FloatLanes present([&](size_t lane) { return first + lane < directions.size() ? 1.0f : 0.0f; });
-    const FloatLanes weight([&](size_t lane) { return first + lane < directions.size() ? weights[first + lane] : 0.0f; });
+    const FloatLanes weight(
+        [&](size_t lane) { return first + lane < directions.size() ? weights[first + lane] : 0.0f; });
     const auto [x, y, z] = direction_lanes(directions, first);
     for_each_sh(lmax, x, y, z, [&](int i, const FloatLanes& basis) {
       plain[i] += present * basis;
@@ -383,7 +406,8 @@ void ShDiffuseSum::sum_lanes(Lmax lmax, std::span<const Vec3> normals, std::span
       for (; i + 1 < count; i += 2) even += weights[i] * basis[i], odd += weights[i + 1] * basis[i + 1];
       if (i < count) even += weights[i] * basis[i];
       const FloatLanes total = even + odd;
-      for (size_t lane = 0; lane < FloatLanes::size() && first + lane < normals.size(); ++lane) out[first + lane][c] = total[lane];
+      for (size_t lane = 0; lane < FloatLanes::size() && first + lane < normals.size(); ++lane)
+        out[first + lane][c] = total[lane];
     }
   }
 }

@@ -36,8 +36,10 @@ void check_lmax(int lmax);
 // (std::experimental::simd, which is not built from a double it would have to round).
 template <typename T>
 T sh_constant(double value) {
-  if constexpr (std::is_floating_point_v<T>) return T(value);
-  else return T(typename T::value_type(value));
+  if constexpr (std::is_floating_point_v<T>)
+    return T(value);
+  else
+    return T(typename T::value_type(value));
 }
 }  // namespace detail
 
@@ -53,7 +55,7 @@ void for_each_sh(Lmax lmax, T x, T y, T z, Visit&& visit) {
   const detail::LegendreTable& table = detail::legendre_table();
   const T sqrt2 = detail::sh_constant<T>(1.4142135623730951);
   T diagonal = detail::sh_constant<T>(0.28209479177387814);  // N_0^0 = 1 / sqrt(4 pi)
-  T re = T(1), im = T(0);                // (x + i y)^m
+  T re = T(1), im = T(0);                                    // (x + i y)^m
   for (int m = 0; m <= lmax; ++m) {
     if (m > 0) {
       diagonal *= detail::sh_constant<T>(table.diagonal_step[m]);

@@ -215,8 +215,9 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
                 const PinholeCamera& camera, const ShIntegratorOptions& options) {
   check_options(options);
   if (!scene.is_single_convex_object()) {
-    warn_once(scene.path + ": the sh integrator assumes a single convex object under distant light; "
-         "it ignores the occlusion and interreflection of this scene (use --integrator path)");
+    warn_once(scene.path +
+              ": the sh integrator assumes a single convex object under distant light; "
+              "it ignores the occlusion and interreflection of this scene (use --integrator path)");
   }
   const SampleShader shader(scene, tracer, environment, camera, options);
   const int k = options.supersampling;
@@ -233,8 +234,10 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
   };
   // threads 0: the caller's arena (all cores, or what an enclosing arena allows, such as
   // invert-fit --threads for its re-renders).
-  if (options.threads > 0) tbb::task_arena(options.threads).execute(render_rows);
-  else render_rows();
+  if (options.threads > 0)
+    tbb::task_arena(options.threads).execute(render_rows);
+  else
+    render_rows();
   return image;
 }
 

@@ -107,7 +107,8 @@ void BM_ShDiffuseSumLanes(benchmark::State& state) {
   const ShDiffuseSum sum(env.sh(static_cast<int>(state.range(0))));
   Pcg32 rng(4);
   std::vector<Vec3> normals(1024);
-  for (Vec3& n : normals) n = Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f).normalized();
+  for (Vec3& n : normals)
+    n = Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f).normalized();
   std::vector<RGB> out(normals.size());
   for (auto _ : state) {
     sum(normals, out);
@@ -163,7 +164,8 @@ std::string benchmark_captures(const std::string& scene, const std::string& hold
   const std::string folder = (std::filesystem::temp_directory_path() / ("glaze_bench_" + scene)).string();
   if (!std::filesystem::exists(folder + "/transforms.json")) {
     const std::string command = std::string(GLAZE_EXECUTABLE) + " render " + GLAZE_SOURCE_DIR + "/scenes/" + scene +
-                                ".gltf --integrator sh --res 512x512 --holdout " + holdout + " --captures " + folder + " 2>/dev/null";
+                                ".gltf --integrator sh --res 512x512 --holdout " + holdout + " --captures " + folder +
+                                " 2>/dev/null";
     if (std::system(command.c_str()) != 0) throw std::runtime_error("could not render the benchmark captures");
   }
   return folder;
@@ -180,7 +182,8 @@ void fit_benchmark(benchmark::State& state, const std::string& folder, int texel
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     const std::vector<ShadingTerms> terms = shading_terms(set, captures, tracer, environment, 16, 4);
     const MaterialFit homogeneous = fit_material(set.samples, terms, {}, 1, {}, {});
-    if (texels_wide > 0) benchmark::DoNotOptimize(fit_texture(set.samples, terms, texels_wide, texels_wide / 2, homogeneous, {}));
+    if (texels_wide > 0)
+      benchmark::DoNotOptimize(fit_texture(set.samples, terms, texels_wide, texels_wide / 2, homogeneous, {}));
     samples = set.samples.size();
   }
   state.counters["samples"] = double(samples);
@@ -212,8 +215,7 @@ void lighting_fit_benchmark(benchmark::State& state, int diffuse_lmax) {
   for (auto _ : state) {
     const SampleSet set = collect_samples(captures, tracer, scene, {});
     LightingData data = gather_lighting_data(set, captures, tracer, 4, footprint, /*noise_free=*/!photographs);
-    benchmark::DoNotOptimize(
-        fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
+    benchmark::DoNotOptimize(fit_lighting_full_band(data, set, diffuse_lmax, material.R0(), material.Rd(), {}));
   }
 }
 // The captures' noise model alone (inverse/noise_model.h), on the same three views read as

@@ -57,9 +57,7 @@ void write_view(const TemporaryDirectory& dir, const std::string& name) {
   write_image(path.string(), Image(4, 3));
 }
 
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+void write_text(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
 
 json sphere_object() { return {{"type", "sphere"}, {"center", {0.0, 0.0, 0.0}}, {"radius", 1.0}}; }
 
@@ -135,7 +133,9 @@ void expect_same_camera(const PinholeCamera& read, const PinholeCamera& written)
   EXPECT_EQ(read.cx, written.cx) << written.name;
   EXPECT_EQ(read.cy, written.cy) << written.name;
   EXPECT_TRUE(read.camera_to_world.matrix().isApprox(written.camera_to_world.matrix(), 1e-6f))
-      << written.name << "\n" << read.camera_to_world.matrix() << "\nwritten\n" << written.camera_to_world.matrix();
+      << written.name << "\n"
+      << read.camera_to_world.matrix() << "\nwritten\n"
+      << written.camera_to_world.matrix();
 }
 
 // ---------------------------------------------------------------------------------------
@@ -198,7 +198,8 @@ TEST(CaptureSet, RoundTripWithPerFrameIntrinsics) {
   write_view(dir, "a.exr");
   write_view(dir, "b.exr");
   set.frames.push_back({"a.exr", camera("wide", 64, 48, 20, 20, 32, 24, rigid(10, Vec3::UnitX(), Vec3(0, 1, 5))), ""});
-  set.frames.push_back({"b.exr", camera("tele", 40, 30, 80, 81, 19.5f, 15.5f, rigid(200, Vec3(0, 1, 1), Vec3(3, -2, 1))), ""});
+  set.frames.push_back(
+      {"b.exr", camera("tele", 40, 30, 80, 81, 19.5f, 15.5f, rigid(200, Vec3(0, 1, 1), Vec3(3, -2, 1))), ""});
   write_transforms(dir.path().string(), set);
   std::ifstream stream(dir.path() / "transforms.json");
   const json written = json::parse(stream);
@@ -382,7 +383,8 @@ TEST(CaptureSet, MissingPathIsAnError) {
 
 TEST(CaptureSet, DirectoryWithoutTransformsIsAnError) {
   TemporaryDirectory dir;
-  EXPECT_TRUE(fails_mentioning([&] { read_transforms(dir.path().string()); }, {dir.file("transforms.json"), "not found"}));
+  EXPECT_TRUE(
+      fails_mentioning([&] { read_transforms(dir.path().string()); }, {dir.file("transforms.json"), "not found"}));
 }
 
 TEST(CaptureSet, MalformedJsonIsAnError) {
@@ -464,8 +466,8 @@ TEST(CaptureSet, MissingImageIsAnError) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
   transforms["frames"][1]["file_path"] = "images/gone.exr";
-  EXPECT_TRUE(rejected(dir, transforms, {"frame 1 (\"images/gone.exr\")", (dir.path() / "images/gone.exr").string(),
-                                         "does not exist"}));
+  EXPECT_TRUE(rejected(dir, transforms,
+                       {"frame 1 (\"images/gone.exr\")", (dir.path() / "images/gone.exr").string(), "does not exist"}));
 }
 
 TEST(CaptureSet, ImagePathNamingADirectoryIsAnError) {
@@ -653,7 +655,8 @@ TEST(CaptureSet, ScaledPoseIsAnError) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
   transforms["frames"][0]["transform_matrix"] = {{2, 0, 0, 0}, {0, 2, 0, 0}, {0, 0, 2, 4}, {0, 0, 0, 1}};
-  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"transform_matrix\" is not a rotation", "rigid camera-to-world"}));
+  EXPECT_TRUE(
+      rejected(dir, transforms, {"frame 0", "\"transform_matrix\" is not a rotation", "rigid camera-to-world"}));
 }
 
 TEST(CaptureSet, SingularPoseIsAnError) {

@@ -84,25 +84,30 @@ const std::map<std::string, std::vector<std::string>> kCommandOptions = {
     {"demo", {"--out", "--spp", "--res"}},
     {"sh", {"--lmax", "--scale", "--rotation", "--to-world", "--res"}},
     {"env", {"--out", "--res"}},
-    {"render", {"--out", "--captures", "--camera", "--res", "--holdout", "--env", "--env-scale", "--env-rotation",
-                "--threads", "--integrator", "--spp", "--time-budget", "--max-depth", "--estimator", "--seed", "--lmax",
-                "--ss", "--ss-refine", "--exposure", "--tone-map"}},
-    {"convergence", {"--out", "--camera", "--res", "--ref-spp", "--ref", "--ref-noise", "--max-spp", "--seed",
-                     "--threads", "--max-depth", "--env", "--env-scale", "--env-rotation"}},
-    {"invert-fit", {"--mode", "--out", "--lmax", "--pixel-footprint", "--points", "--seed", "--min-cos",
-                    "--max-iterations", "--env", "--env-scale", "--env-rotation", "--holdout-dir", "--threads",
-                    "--loss", "--loss-scale", "--texture-res", "--R0", "--Rd", "--env-res", "--solve-res", "--ridge",
-                    "--diffuse-lmax", "--max-passes", "--preview", "--frames", "--screenshot", "--exposure",
-                    "--tone-map"}},
+    {"render",
+     {"--out",          "--captures", "--camera",     "--res",       "--holdout",     "--env",       "--env-scale",
+      "--env-rotation", "--threads",  "--integrator", "--spp",       "--time-budget", "--max-depth", "--estimator",
+      "--seed",         "--lmax",     "--ss",         "--ss-refine", "--exposure",    "--tone-map"}},
+    {"convergence",
+     {"--out", "--camera", "--res", "--ref-spp", "--ref", "--ref-noise", "--max-spp", "--seed", "--threads",
+      "--max-depth", "--env", "--env-scale", "--env-rotation"}},
+    {"invert-fit", {"--mode",    "--out",          "--lmax",         "--pixel-footprint",
+                    "--points",  "--seed",         "--min-cos",      "--max-iterations",
+                    "--env",     "--env-scale",    "--env-rotation", "--holdout-dir",
+                    "--threads", "--loss",         "--loss-scale",   "--texture-res",
+                    "--R0",      "--Rd",           "--env-res",      "--solve-res",
+                    "--ridge",   "--diffuse-lmax", "--max-passes",   "--preview",
+                    "--frames",  "--screenshot",   "--exposure",     "--tone-map"}},
 #if GLAZE_HAVE_PREVIEW
-    {"preview", {"--camera", "--res", "--integrator", "--lmax", "--ss", "--max-spp", "--seed", "--threads",
-                 "--max-depth", "--env", "--env-scale", "--env-rotation", "--exposure", "--tone-map", "--save-dir",
-                 "--frames", "--screenshot", "--spin"}},
+    {"preview",
+     {"--camera", "--res", "--integrator", "--lmax", "--ss", "--max-spp", "--seed", "--threads", "--max-depth", "--env",
+      "--env-scale", "--env-rotation", "--exposure", "--tone-map", "--save-dir", "--frames", "--screenshot", "--spin"}},
 #else
     {"preview", {}},
 #endif
-    {"reproduce", {"--out", "--quick", "--res", "--spp", "--seed", "--texture-res", "--env-res", "--lighting",
-                   "--real-maps", "--scenes", "--no-convergence", "--threads"}},
+    {"reproduce",
+     {"--out", "--quick", "--res", "--spp", "--seed", "--texture-res", "--env-res", "--lighting", "--real-maps",
+      "--scenes", "--no-convergence", "--threads"}},
     {"help", {}},
 };
 
@@ -158,18 +163,18 @@ TEST(Cli, UnknownOptionsAndOutOfRangeValuesNameTheOption) {
   const std::string scene = std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf";
   const std::string out = " --out " + dir.file("out");
   const std::map<std::string, std::pair<std::string, std::string>> commands = {
-      // command line: an out-of-range option, and the option it names
-      {"demo" + out, {"--spp 0", "--spp"}},
-      {"sh procedural:office", {"--lmax 65", "--lmax"}},
-      {"env procedural office" + out + ".exr", {"--res 0x512", "--res"}},
-      {"render " + scene + out + ".exr", {"--threads 1025", "--threads"}},
-      {"convergence " + scene + out, {"--seed -1", "--seed"}},
-      {"invert-fit " + dir.file("captures") + " --mode material" + out, {"--pixel-footprint 17", "--pixel-footprint"}},
+    // command line: an out-of-range option, and the option it names
+    {"demo" + out, {"--spp 0", "--spp"}},
+    {"sh procedural:office", {"--lmax 65", "--lmax"}},
+    {"env procedural office" + out + ".exr", {"--res 0x512", "--res"}},
+    {"render " + scene + out + ".exr", {"--threads 1025", "--threads"}},
+    {"convergence " + scene + out, {"--seed -1", "--seed"}},
+    {"invert-fit " + dir.file("captures") + " --mode material" + out, {"--pixel-footprint 17", "--pixel-footprint"}},
 #if GLAZE_HAVE_PREVIEW
-      {"preview " + scene, {"--max-spp 0", "--max-spp"}},
+    {"preview " + scene, {"--max-spp 0", "--max-spp"}},
 #endif
-      {"reproduce" + out, {"--env-res 64x0", "--env-res"}},
-      {"help", {"--bogus 1", "--bogus"}},
+    {"reproduce" + out, {"--env-res 64x0", "--env-res"}},
+    {"help", {"--bogus 1", "--bogus"}},
   };
   for (const auto& [command, bad] : commands) {
     // (No display: preview would fail at once, after its options.)
@@ -221,25 +226,44 @@ TEST(Cli, NonTwoToOneMapWarnsButWorks) {
 TEST(Cli, RenderWithTheShIntegrator) {
   testing::TemporaryDirectory dir;
   const std::string scenes = std::string(GLAZE_SOURCE_DIR) + "/scenes/";
-  const CommandResult run = glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 6 --ss 2 --res 32x32 --out " + dir.file("sh.exr"), dir);
+  const CommandResult run =
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 6 --ss 2 --res 32x32 --out " +
+                dir.file("sh.exr"),
+            dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const Image image = read_image(dir.file("sh.exr"));
   EXPECT_EQ(image.width, 32);
   EXPECT_GT(image.at(16, 16)[0], image.at(16, 16)[1]);  // a red sphere
   // Not a single convex object: rendered, with a warning that occlusion is ignored.
-  const CommandResult still = glaze("render " + scenes + "still_life_office.gltf --integrator sh --res 32x24 --out " + dir.file("still.exr"), dir);
+  const CommandResult still = glaze(
+      "render " + scenes + "still_life_office.gltf --integrator sh --res 32x24 --out " + dir.file("still.exr"), dir);
   EXPECT_EQ(still.exit_code, 0) << still.err;
   EXPECT_NE(still.err.find("occlusion"), std::string::npos) << still.err;
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 99 --out " + dir.file("x.exr"), dir), "--lmax");
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --spp 4 --out " + dir.file("x.exr"), dir), "--spp");
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --lmax 4 --out " + dir.file("x.exr"), dir), "--lmax");
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator photon --out " + dir.file("x.exr"), dir), "photon");
+  expect_clear_failure(
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --lmax 99 --out " + dir.file("x.exr"), dir),
+      "--lmax");
+  expect_clear_failure(
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --spp 4 --out " + dir.file("x.exr"), dir),
+      "--spp");
+  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --lmax 4 --out " + dir.file("x.exr"), dir),
+                       "--lmax");
+  expect_clear_failure(
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator photon --out " + dir.file("x.exr"), dir),
+      "photon");
   // Refinement: reported, only for sh, and not for capture sets.
-  const CommandResult refined = glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss 1 --ss-refine 4 --res 32x32 --out " + dir.file("refined.exr"), dir);
+  const CommandResult refined =
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss 1 --ss-refine 4 --res 32x32 --out " +
+                dir.file("refined.exr"),
+            dir);
   ASSERT_EQ(refined.exit_code, 0) << refined.err;
   EXPECT_NE(refined.err.find("refined 4"), std::string::npos) << refined.err;
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --ss-refine 4 --out " + dir.file("x.exr"), dir), "--ss-refine");
-  expect_clear_failure(glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss-refine 4 --captures " + dir.file("set"), dir), "--ss-refine");
+  expect_clear_failure(
+      glaze("render " + scenes + "red_sphere_office.gltf --ss-refine 4 --out " + dir.file("x.exr"), dir),
+      "--ss-refine");
+  expect_clear_failure(
+      glaze("render " + scenes + "red_sphere_office.gltf --integrator sh --ss-refine 4 --captures " + dir.file("set"),
+            dir),
+      "--ss-refine");
 }
 
 // The study on a tiny frame: every row and file is there, the path tracer's error falls
@@ -247,7 +271,8 @@ TEST(Cli, RenderWithTheShIntegrator) {
 TEST(Cli, ConvergenceWritesTheStudy) {
   testing::TemporaryDirectory dir;
   const std::string scene = std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf";
-  const CommandResult run = glaze("convergence " + scene + " --res 32x32 --ref-spp 512 --max-spp 16 --out " + dir.file("study"), dir);
+  const CommandResult run =
+      glaze("convergence " + scene + " --res 32x32 --ref-spp 512 --max-spp 16 --out " + dir.file("study"), dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("relative RMSE 1%"), std::string::npos) << run.out;
 
@@ -268,7 +293,7 @@ TEST(Cli, ConvergenceWritesTheStudy) {
     EXPECT_GT(std::stod(seconds), 0.0) << line;
     ++rows;
   }
-  EXPECT_EQ(rows, 5 + 25);  // 1..16 spp, 5 lmax x (ss 1, 2, 4, and ss 1 and 2 refined to 8)
+  EXPECT_EQ(rows, 5 + 25);                           // 1..16 spp, 5 lmax x (ss 1, 2, 4, and ss 1 and 2 refined to 8)
   EXPECT_LT(error["16 spp"], 0.5 * error["1 spp"]);  // 1/4 expected
   EXPECT_GT(error["16 spp"], 0.1 * error["1 spp"]);
   EXPECT_LT(error["lmax 12 ss 4"], error["lmax 2 ss 4"]);
@@ -285,16 +310,21 @@ TEST(Cli, ConvergenceWritesTheStudy) {
   // A target the reference's own noise cannot resolve has no time, and says why.
   const double noise = summary["reference"]["relative_noise"].get<double>();
   for (const char* target : {"0.01", "0.003"})
-    EXPECT_EQ(summary["time_to"][target].contains("resolvable"), noise > 0.5 * std::stod(target)) << target << ", noise " << noise;
+    EXPECT_EQ(summary["time_to"][target].contains("resolvable"), noise > 0.5 * std::stod(target))
+        << target << ", noise " << noise;
   const Image plot = read_image(dir.file("study/convergence.png"));
   EXPECT_EQ(plot.width, 960);
   int ink = 0;
   for (float value : plot.pixels) ink += value < 0.5f;
   EXPECT_GT(ink, 1000);
 
-  expect_clear_failure(glaze("convergence " + scene + " --res 16x16 --ref " + dir.file("study/reference.exr") + " --out " + dir.file("x"), dir), "--res");
+  expect_clear_failure(glaze("convergence " + scene + " --res 16x16 --ref " + dir.file("study/reference.exr") +
+                                 " --out " + dir.file("x"),
+                             dir),
+                       "--res");
   expect_clear_failure(glaze("convergence " + scene + " --ref a.exr --ref-spp 8 --out " + dir.file("x"), dir), "--ref");
-  expect_clear_failure(glaze("convergence " + scene + " --res 8x8 --ref-spp 64 --max-spp 32 --out " + dir.file("x"), dir), "--max-spp");
+  expect_clear_failure(
+      glaze("convergence " + scene + " --res 8x8 --ref-spp 64 --max-spp 32 --out " + dir.file("x"), dir), "--max-spp");
 }
 
 TEST(Cli, DemoRunsOnTheEmbeddedDefault) {

@@ -40,10 +40,10 @@ double relative_rms_at_truth(bool noise_free) {
   constexpr double kR0 = 0.04;
   TemporaryDirectory dir;
   const std::string folder = dir.file("views");
-  const testing::CommandResult run = testing::run_glaze(
-      "render " + testing::scenes_dir() + "white_sphere_office.gltf --captures " + folder +
-          " --integrator sh --ss 1 --res 96x96 --holdout novel_0,novel_1",
-      dir);
+  const testing::CommandResult run =
+      testing::run_glaze("render " + testing::scenes_dir() + "white_sphere_office.gltf --captures " + folder +
+                             " --integrator sh --ss 1 --res 96x96 --holdout novel_0,novel_1",
+                         dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const CaptureSet captures = read_transforms(folder + "/transforms.json");
   const Scene object = capture_object_scene(captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
@@ -51,9 +51,10 @@ double relative_rms_at_truth(bool noise_free) {
   const SampleSet samples = collect_samples(captures, tracer, object, {});
   LightingData data = gather_lighting_data(samples, captures, tracer, 4, 1, noise_free);
   for (size_t k = 0; k < data.observed.size(); ++k)
-    data.observed[k] = RGB::Constant(float(schlick_fresnel(kR0, double(data.mu[k])) * smooth_lighting(data.reflected[k])));
+    data.observed[k] =
+        RGB::Constant(float(schlick_fresnel(kR0, double(data.mu[k])) * smooth_lighting(data.reflected[k])));
   data.noise = estimate_noise(data.observed, samples, noise_free);  // of what is now observed
-  const CrossViewSystem cross(data, samples, /*trim=*/false);  // uncalibrated: least squares
+  const CrossViewSystem cross(data, samples, /*trim=*/false);       // uncalibrated: least squares
   EXPECT_GT(cross.pair_count(), 10000u);
   const CrossViewSystem::Fit at = cross.fit(kR0);
   const double rms = kNoiseFloor * std::sqrt(at.cost / double(cross.pair_count()));

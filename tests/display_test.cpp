@@ -17,7 +17,7 @@ TEST(Display, ClampIsTheExposedValueAndSrgbIsTheStandardCurve) {
   const DisplaySettings clamp{0.0f, ToneMapping::clamp};
   EXPECT_FLOAT_EQ(tone_map(0.5f, clamp), 0.5f);
   EXPECT_FLOAT_EQ(tone_map(3.0f, clamp), 1.0f);
-  EXPECT_FLOAT_EQ(tone_map(0.25f, {1.0f, ToneMapping::clamp}), 0.5f);   // +1 EV doubles
+  EXPECT_FLOAT_EQ(tone_map(0.25f, {1.0f, ToneMapping::clamp}), 0.5f);    // +1 EV doubles
   EXPECT_FLOAT_EQ(tone_map(0.5f, {-2.0f, ToneMapping::clamp}), 0.125f);  // -2 EV quarters
   // IEC 61966-2-1: 1.055 x^(1/2.4) - 0.055 above 0.0031308, 12.92 x below.
   for (float x : {0.0f, 0.002f, 0.01f, 0.18f, 0.5f, 0.9f, 1.0f}) {
@@ -69,12 +69,18 @@ TEST(Display, FalseColourRunsFromLowToHighAndLeavesUnknownBlack) {
   const std::vector<float> values = {0.0f, 1.0f, 0.5f, nan, -3.0f, 7.0f};
   const std::vector<uint8_t> linear = false_colour_image(values, 6, 1, 0.0f, 1.0f, false);
   // viridis: dark violet at the low end, yellow at the high end; clamped outside.
-  EXPECT_EQ(linear[0], 68); EXPECT_EQ(linear[1], 1); EXPECT_EQ(linear[2], 84);
-  EXPECT_EQ(linear[3], 253); EXPECT_EQ(linear[4], 231); EXPECT_EQ(linear[5], 37);
-  EXPECT_EQ(linear[6], 33); EXPECT_EQ(linear[7], 145); EXPECT_NEAR(linear[8], 141, 1);  // the middle stop
-  EXPECT_EQ(linear[9] + linear[10] + linear[11], 0);                               // NaN: black
-  EXPECT_EQ(linear[12], 68);                                                       // below: low end
-  EXPECT_EQ(linear[15], 253);                                                      // above: high end
+  EXPECT_EQ(linear[0], 68);
+  EXPECT_EQ(linear[1], 1);
+  EXPECT_EQ(linear[2], 84);
+  EXPECT_EQ(linear[3], 253);
+  EXPECT_EQ(linear[4], 231);
+  EXPECT_EQ(linear[5], 37);
+  EXPECT_EQ(linear[6], 33);
+  EXPECT_EQ(linear[7], 145);
+  EXPECT_NEAR(linear[8], 141, 1);                     // the middle stop
+  EXPECT_EQ(linear[9] + linear[10] + linear[11], 0);  // NaN: black
+  EXPECT_EQ(linear[12], 68);                          // below: low end
+  EXPECT_EQ(linear[15], 253);                         // above: high end
   // Logarithmic: 1e-3 .. 1 puts 10^-1.5 at the middle; zero and negatives are black.
   const std::vector<float> logs = {float(std::pow(10.0, -1.5)), 0.0f};
   const std::vector<uint8_t> log_colours = false_colour_image(logs, 2, 1, 1e-3f, 1.0f, true);
@@ -101,7 +107,8 @@ TEST(Display, PicturesRoundTripThroughPngAsSrgb) {
     FAIL() << "no writer for the extension should throw";
   } catch (const Error& error) {
     EXPECT_NE(std::string(error.what()).find("q.nosuchformat"), std::string::npos) << error.what();
-    EXPECT_EQ(std::string(error.what()).find(".tmp"), std::string::npos) << "names the temporary file: " << error.what();
+    EXPECT_EQ(std::string(error.what()).find(".tmp"), std::string::npos)
+        << "names the temporary file: " << error.what();
   }
 }
 

@@ -89,7 +89,8 @@ TEST(Environment, WarnsForNonTwoToOneAndRepairsNonFiniteTexels) {
   EXPECT_NE(warnings.messages[0].find("not 2:1"), std::string::npos);
   EXPECT_NE(warnings.messages[1].find("3 texel values"), std::string::npos);
   EXPECT_TRUE(env.map().at(0, 0).allFinite());
-  for (int k = 0; k < 100; ++k) EXPECT_TRUE(env.eval(Vec3(std::sin(k * 1.f), std::cos(k * 1.f), 0.3f).normalized()).allFinite());
+  for (int k = 0; k < 100; ++k)
+    EXPECT_TRUE(env.eval(Vec3(std::sin(k * 1.f), std::cos(k * 1.f), 0.3f).normalized()).allFinite());
 }
 
 // Checks sample() against pdf(): the PDF's mass per cell of a (u, v) grid, computed
@@ -105,10 +106,12 @@ void check_sampling(const Environment& env, int samples, uint64_t seed) {
       const double density_uv = env.pdf(env.uv_to_direction(centre)) * 2 * kPiD * kPiD * std::sin(kPiD * centre.y());
       // Split the texel's (u, v) rectangle over the grid cells it overlaps.
       for (int cj = j * grid_v / height; cj < grid_v && cj <= (j + 1) * grid_v / height; ++cj) {
-        const double v_overlap = std::min((j + 1.0) / height, (cj + 1.0) / grid_v) - std::max(double(j) / height, double(cj) / grid_v);
+        const double v_overlap =
+            std::min((j + 1.0) / height, (cj + 1.0) / grid_v) - std::max(double(j) / height, double(cj) / grid_v);
         if (v_overlap <= 0) continue;
         for (int ci = i * grid_u / width; ci < grid_u && ci <= (i + 1) * grid_u / width; ++ci) {
-          const double u_overlap = std::min((i + 1.0) / width, (ci + 1.0) / grid_u) - std::max(double(i) / width, double(ci) / grid_u);
+          const double u_overlap =
+              std::min((i + 1.0) / width, (ci + 1.0) / grid_u) - std::max(double(i) / width, double(ci) / grid_u);
           if (u_overlap <= 0) continue;
           expected[cj * grid_u + ci] += density_uv * u_overlap * v_overlap;
           total += density_uv * u_overlap * v_overlap;
@@ -144,7 +147,8 @@ void check_unbiased_integral(const Environment& env, int samples, uint64_t seed)
   const Image& map = env.map();
   double direct = 0.0;
   for (int j = 0; j < map.height; ++j) {
-    const double solid_angle = 2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
+    const double solid_angle =
+        2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
     for (int i = 0; i < map.width; ++i) direct += luminance(map.at(i, j)) * solid_angle;
   }
   Pcg32 rng(seed);
@@ -176,7 +180,8 @@ TEST(EnvironmentSampling, MatchesPdfOnRealMap) {
 }
 
 TEST(EnvironmentSampling, UnbiasedIntegralOnProceduralRooms) {
-  check_unbiased_integral(Environment(make_procedural_environment("office", 512, 256), {.rotation_degrees = 10}), 400000, 21);
+  check_unbiased_integral(Environment(make_procedural_environment("office", 512, 256), {.rotation_degrees = 10}),
+                          400000, 21);
   check_unbiased_integral(Environment(make_procedural_environment("blue-room", 256, 128), {}), 400000, 22);
 }
 
@@ -236,7 +241,7 @@ TEST(ProceduralEnvironment, OfficeHasItsCeilingLightsAndBlueRoomItsSpots) {
   EXPECT_LT(luminance(env.eval(Vec3(0, -1, 0))), 1.0f);  // floor is dark
   const Environment blue(make_procedural_environment("blue-room", 512, 256), {});
   const RGB wall = blue.eval(Vec3(0, 0, 1));
-  EXPECT_GT(wall[2], 2 * wall[0]);                           // blue walls
+  EXPECT_GT(wall[2], 2 * wall[0]);  // blue walls
   const RGB white_spot = blue.eval(Vec3(-0.8f, 0.5f, -3.0f).normalized());
   const RGB red_spot = blue.eval(Vec3(3.0f, 0.7f, 0.6f).normalized());
   EXPECT_GT(luminance(white_spot), 10 * luminance(wall));

@@ -21,18 +21,21 @@ namespace glaze {
 namespace {
 
 using testing::add_multiplicative_noise;
-using testing::expect_all_finite;
 using testing::CommandResult;
+using testing::expect_all_finite;
 using testing::read_json;
 using testing::sphere_scene_file;
 using testing::TemporaryDirectory;
 
 const std::string kScenes = testing::scenes_dir();
 
-CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) { return testing::run_glaze(arguments, dir); }
+CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) {
+  return testing::run_glaze(arguments, dir);
+}
 
 // Renders `scene` (a path) as a capture set into dir/NAME with the given options.
-std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name, const std::string& options) {
+std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name,
+                     const std::string& options) {
   const std::string folder = dir.file(name);
   const CommandResult run = glaze("render " + scene + " --captures " + folder + " " + options, dir);
   EXPECT_FALSE(run.crashed) << run.err;
@@ -67,9 +70,10 @@ Fit fit(const TemporaryDirectory& dir, const std::string& folder, const std::str
 void expect_material(const std::string& label, const Fit& fit, double R0_tolerance, double Rd_tolerance) {
   const nlohmann::json& result = fit.result;
   const nlohmann::json& truth = result["reference_material"];
-  std::printf("%s: R0 %.5f (true %.5f), Rd %.5f %.5f %.5f (true %.5f %.5f %.5f)\n", label.c_str(), result["R0"].get<double>(),
-              truth["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(), result["Rd"][2].get<double>(),
-              truth["Rd"][0].get<double>(), truth["Rd"][1].get<double>(), truth["Rd"][2].get<double>());
+  std::printf("%s: R0 %.5f (true %.5f), Rd %.5f %.5f %.5f (true %.5f %.5f %.5f)\n", label.c_str(),
+              result["R0"].get<double>(), truth["R0"].get<double>(), result["Rd"][0].get<double>(),
+              result["Rd"][1].get<double>(), result["Rd"][2].get<double>(), truth["Rd"][0].get<double>(),
+              truth["Rd"][1].get<double>(), truth["Rd"][2].get<double>());
   EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), R0_tolerance) << label;
   for (int c = 0; c < 3; ++c) {
     const double error = std::abs(result["Rd"][c].get<double>() - truth["Rd"][c].get<double>());
@@ -77,7 +81,8 @@ void expect_material(const std::string& label, const Fit& fit, double R0_toleran
     // Out of bounds is acceptable only when said: the channel flagged and the warning printed.
     EXPECT_FALSE(result["Rd_constrained"][c].get<bool>())
         << label << ": Rd channel " << c << " off by " << error << " (bound " << Rd_tolerance << ") with no warning";
-    EXPECT_NE(fit.err.find(std::string("Rd ") + "RGB"[c] + " is not constrained"), std::string::npos) << label << "\n" << fit.err;
+    EXPECT_NE(fit.err.find(std::string("Rd ") + "RGB"[c] + " is not constrained"), std::string::npos) << label << "\n"
+                                                                                                      << fit.err;
   }
   EXPECT_TRUE(result["converged"].get<bool>()) << label << ": " << result["solver"];
   for (int c = 0; c < 3; ++c) {  // clamped to the physical range
@@ -91,14 +96,15 @@ void expect_material(const std::string& label, const Fit& fit, double R0_toleran
 void expect_lighting(const std::string& label, const Fit& fit) {
   const nlohmann::json& result = fit.result;
   const double error = result["reference_L_lm_error_l2"].get<double>();
-  std::printf("%s: L_lm (l <= 2) max error %.2f%% of L00, scale %.4f %.4f %.4f, mirror share %.1f%%, %s\n", label.c_str(),
-              100 * error, result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
-              result["reference_scale"][2].get<double>(), 100 * result["mirror_share"].get<double>(),
-              result["solve"].get<std::string>().c_str());
+  std::printf("%s: L_lm (l <= 2) max error %.2f%% of L00, scale %.4f %.4f %.4f, mirror share %.1f%%, %s\n",
+              label.c_str(), 100 * error, result["reference_scale"][0].get<double>(),
+              result["reference_scale"][1].get<double>(), result["reference_scale"][2].get<double>(),
+              100 * result["mirror_share"].get<double>(), result["solve"].get<std::string>().c_str());
   EXPECT_EQ(result["L_lm"].size(), 25u);
   if (error >= 0.03) {
     EXPECT_NE(fit.err.find("glaze: warning:"), std::string::npos)
-        << label << ": L_lm (l <= 2) off by " << 100 * error << "% of L00 (bound 3%) and no warning\n" << fit.err;
+        << label << ": L_lm (l <= 2) off by " << 100 * error << "% of L00 (bound 3%) and no warning\n"
+        << fit.err;
   }
 }
 
@@ -109,7 +115,8 @@ const RGB kNearlyBlack = RGB::Constant(0.02f);
 // sends back is the mirror reflection, the diffuse term a few percent of it.
 TEST(ExtremeCases, NearlyBlackSphereShCaptures) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, sphere_scene_file(dir, 0.04f, kNearlyBlack), "black", "--integrator sh --ss 1 --res 96x96");
+  const std::string folder =
+      captures(dir, sphere_scene_file(dir, 0.04f, kNearlyBlack), "black", "--integrator sh --ss 1 --res 96x96");
   // No --lmax or --pixel-footprint: transforms.json records how glaze rendered them.
   const Fit result = fit(dir, folder, "--mode material");
   expect_material("nearly black, sh", result, 1e-4, 1e-4);
@@ -122,7 +129,8 @@ TEST(ExtremeCases, WhiteSphereRdOneShCaptures) {
   for (const float R0 : {0.0f, 0.2f}) {
     const std::string name = "white_R0_" + std::to_string(R0);
     SCOPED_TRACE(name);
-    const std::string folder = captures(dir, sphere_scene_file(dir, R0, kWhite, name + ".gltf"), name, "--integrator sh --ss 1 --res 96x96");
+    const std::string folder =
+        captures(dir, sphere_scene_file(dir, R0, kWhite, name + ".gltf"), name, "--integrator sh --ss 1 --res 96x96");
     const Fit result = fit(dir, folder, "--mode material");
     expect_material("Rd = 1, R0 = " + std::to_string(R0) + ", sh", result, 1e-4, 1e-4);
     if (R0 == 0.0f) {
@@ -141,7 +149,8 @@ TEST(ExtremeCases, NearlyBlackAndRdOnePathTraced) {
   TemporaryDirectory dir;
   for (const auto& [R0, Rd, name] : {std::tuple{0.04f, kNearlyBlack, "black"}, std::tuple{0.2f, kWhite, "white"}}) {
     SCOPED_TRACE(name);
-    const std::string folder = captures(dir, sphere_scene_file(dir, R0, Rd, std::string(name) + ".gltf"), name, "--spp 64 --res 96x96");
+    const std::string folder =
+        captures(dir, sphere_scene_file(dir, R0, Rd, std::string(name) + ".gltf"), name, "--spp 64 --res 96x96");
     expect_material(std::string(name) + ", path-traced 64 spp", fit(dir, folder, "--mode material"), 0.004, 0.01);
   }
 }
@@ -151,8 +160,8 @@ TEST(ExtremeCases, NearlyBlackAndRdOnePathTraced) {
 TEST(ExtremeCases, StudioMapMaterial) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   TemporaryDirectory dir;
-  const std::string folder =
-      captures(dir, kScenes + "white_sphere_office.gltf", "studio", "--integrator sh --ss 1 --res 96x96 --env " + studio.string());
+  const std::string folder = captures(dir, kScenes + "white_sphere_office.gltf", "studio",
+                                      "--integrator sh --ss 1 --res 96x96 --env " + studio.string());
   expect_material("white sphere, studio map, sh", fit(dir, folder, "--mode material"), 1e-4, 1e-4);
 }
 
@@ -162,8 +171,9 @@ TEST(ExtremeCases, StudioMapMaterial) {
 TEST(ExtremeCases, StudioMapLighting) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, kScenes + "white_sphere_office.gltf", "studio",
-                                      "--integrator sh --ss 1 --res 256x256 --holdout novel_0,novel_1 --env " + studio.string());
+  const std::string folder =
+      captures(dir, kScenes + "white_sphere_office.gltf", "studio",
+               "--integrator sh --ss 1 --res 256x256 --holdout novel_0,novel_1 --env " + studio.string());
   const Fit result = fit(dir, folder, "--mode lighting --pixel-footprint 1");
   expect_lighting("studio map, lighting, 256x256", result);
   EXPECT_LT(result.result["reference_L_lm_error_l2"].get<double>(), 0.03);
@@ -178,8 +188,9 @@ TEST(ExtremeCases, StudioMapLighting) {
 TEST(ExtremeCases, StudioMapLightingAtLowResolutionIsWithinBoundsOrWarns) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, kScenes + "white_sphere_office.gltf", "studio",
-                                      "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1 --env " + studio.string());
+  const std::string folder =
+      captures(dir, kScenes + "white_sphere_office.gltf", "studio",
+               "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1 --env " + studio.string());
   expect_lighting("studio map, lighting, 128x128", fit(dir, folder, "--mode lighting --pixel-footprint 1"));
 }
 
@@ -190,8 +201,8 @@ TEST(ExtremeCases, FivePercentNoiseOnNearlyBlackAndRdOneSpheres) {
   for (const auto& [R0, Rd, name] : {std::tuple{0.04f, kNearlyBlack, "black"}, std::tuple{0.0f, kWhite, "white_R0_0"},
                                      std::tuple{0.2f, kWhite, "white_R0_0.2"}}) {
     SCOPED_TRACE(name);
-    const std::string folder =
-        captures(dir, sphere_scene_file(dir, R0, Rd, std::string(name) + ".gltf"), name, "--integrator sh --ss 1 --res 96x96");
+    const std::string folder = captures(dir, sphere_scene_file(dir, R0, Rd, std::string(name) + ".gltf"), name,
+                                        "--integrator sh --ss 1 --res 96x96");
     add_multiplicative_noise(folder, 0.05f);
     const Fit result = fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1");
     expect_material(std::string(name) + ", 5% noise", result, 0.01, 0.01);
@@ -207,7 +218,8 @@ TEST(ExtremeCases, FivePercentNoiseUnderTheStudioMap) {
   const std::string folder = captures(dir, sphere_scene_file(dir, 0.04f, kNearlyBlack), "black",
                                       "--integrator sh --ss 1 --res 96x96 --env " + studio.string());
   add_multiplicative_noise(folder, 0.05f);
-  expect_material("nearly black, studio map, 5% noise", fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
+  expect_material("nearly black, studio map, 5% noise",
+                  fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
 }
 
 // --mode joint on a white (Rd = 1) sphere with coat R0 in the office, noise-free
@@ -217,10 +229,12 @@ Fit joint_fit_on_white_sphere(const TemporaryDirectory& dir, float R0) {
                                       "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1");
   const Fit fitted = fit(dir, folder, "--mode joint --pixel-footprint 1");
   const nlohmann::json& result = fitted.result;
-  std::printf("joint, Rd = 1, R0 = %g: R0 %.4f, Rd %.4f %.4f %.4f, lighting scale %.4f %.4f %.4f, L_lm error %.2f%% of L00\n", R0,
-              result["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(), result["Rd"][2].get<double>(),
-              result["reference_scale"][0].get<double>(), result["reference_scale"][1].get<double>(),
-              result["reference_scale"][2].get<double>(), 100 * result["reference_L_lm_error_l2"].get<double>());
+  std::printf(
+      "joint, Rd = 1, R0 = %g: R0 %.4f, Rd %.4f %.4f %.4f, lighting scale %.4f %.4f %.4f, L_lm error %.2f%% of L00\n",
+      R0, result["R0"].get<double>(), result["Rd"][0].get<double>(), result["Rd"][1].get<double>(),
+      result["Rd"][2].get<double>(), result["reference_scale"][0].get<double>(),
+      result["reference_scale"][1].get<double>(), result["reference_scale"][2].get<double>(),
+      100 * result["reference_L_lm_error_l2"].get<double>());
   return fitted;
 }
 

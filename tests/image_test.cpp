@@ -208,8 +208,8 @@ TEST(ImageLookup, RepeatTilesTheImage) {
   for (const float x : {0.25f, 1.75f, 2.875f, 3.5f})
     for (const float tiles : {-262144.0f, -3.0f, -1.0f, 1.0f, 5.0f, 262144.0f}) {
       const BilinearFootprint at = bilinear_footprint(x, 1.25f, 4, 2, Wrap::repeat, Wrap::repeat);
-      const BilinearFootprint away = bilinear_footprint(x + 4.0f * tiles, 1.25f + 2.0f * tiles, 4, 2, Wrap::repeat,
-                                                        Wrap::repeat);
+      const BilinearFootprint away =
+          bilinear_footprint(x + 4.0f * tiles, 1.25f + 2.0f * tiles, 4, 2, Wrap::repeat, Wrap::repeat);
       expect_footprint(away, at.x0, at.x1, at.y0, at.y1, at.fx, at.fy);
     }
 }

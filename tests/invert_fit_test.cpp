@@ -26,7 +26,9 @@ using testing::TemporaryDirectory;
 
 const std::string kScenes = testing::scenes_dir();
 
-CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) { return testing::run_glaze(arguments, dir); }
+CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) {
+  return testing::run_glaze(arguments, dir);
+}
 
 // Renders SCENE's capture set into dir/NAME with the given renderer options.
 std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name,
@@ -47,7 +49,8 @@ nlohmann::json fit(const TemporaryDirectory& dir, const std::string& folder, con
 void expect_material(const nlohmann::json& result, double R0_tolerance, double Rd_tolerance) {
   const nlohmann::json& truth = result["reference_material"];
   EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), R0_tolerance);
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_tolerance) << "channel " << c;
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), Rd_tolerance) << "channel " << c;
   EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
 }
 
@@ -66,7 +69,8 @@ TEST(InvertFit, ShCapturesRecoverTheMaterialExactly) {
   TemporaryDirectory dir;
   for (const char* scene : {"red_sphere_office.gltf", "white_sphere_blue_room.gltf"}) {
     SCOPED_TRACE(scene);
-    const std::string folder = captures(dir, scene, std::string("sh_") + scene, "--integrator sh --ss 1 --lmax 16 --res 96x96");
+    const std::string folder =
+        captures(dir, scene, std::string("sh_") + scene, "--integrator sh --ss 1 --lmax 16 --res 96x96");
     // No --lmax or --pixel-footprint: transforms.json records how glaze rendered them.
     const nlohmann::json result = fit(dir, folder, "--mode material");
     EXPECT_EQ(result["pixel_footprint"].get<int>(), 1);
@@ -82,7 +86,8 @@ TEST(InvertFit, FivePercentNoiseKeepsEstimatesWithinOnePercent) {
   TemporaryDirectory dir;
   for (const char* scene : {"red_sphere_office.gltf", "white_sphere_blue_room.gltf"}) {
     SCOPED_TRACE(scene);
-    const std::string folder = captures(dir, scene, std::string("noisy_") + scene, "--integrator sh --ss 1 --res 96x96");
+    const std::string folder =
+        captures(dir, scene, std::string("noisy_") + scene, "--integrator sh --ss 1 --res 96x96");
     add_multiplicative_noise(folder, 0.05f);  // 5%, Gaussian
     expect_material(fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 1"), 0.01, 0.01);
   }
@@ -107,7 +112,8 @@ TEST(InvertFit, MisregisteredViewShowsInResidualsAndRobustLossCopes) {
     if (f != 1) {
       EXPECT_GT(views[1]["rms"].get<double>(), 3 * views[f]["rms"].get<double>()) << "view " << f;
     }
-  const nlohmann::json robust = fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 2 --loss cauchy --loss-scale 0.02");
+  const nlohmann::json robust =
+      fit(dir, folder, "--mode material --lmax 4 --pixel-footprint 2 --loss cauchy --loss-scale 0.02");
   expect_material(robust, 0.005, 0.01);
   std::printf("one view off by a pixel: R0 %.4f plain, %.4f robust (true 0.0452)\n", plain["R0"].get<double>(),
               robust["R0"].get<double>());
@@ -116,7 +122,8 @@ TEST(InvertFit, MisregisteredViewShowsInResidualsAndRobustLossCopes) {
 TEST(InvertFit, ParametersAtTheirBoundsAreRecoveredAtTheBounds) {
   TemporaryDirectory dir;
   const std::string scene = sphere_scene_file(dir, 0.0f, RGB(1.0f, 0.0f, 0.5f));
-  const CommandResult render = glaze("render " + scene + " --captures " + dir.file("bounds") + " --integrator sh --ss 1 --res 96x96", dir);
+  const CommandResult render =
+      glaze("render " + scene + " --captures " + dir.file("bounds") + " --integrator sh --ss 1 --res 96x96", dir);
   ASSERT_EQ(render.exit_code, 0) << render.err;
   const nlohmann::json result = fit(dir, dir.file("bounds"), "--mode material --lmax 4 --pixel-footprint 1");
   EXPECT_NEAR(result["R0"].get<double>(), 0.0, 1e-6);
@@ -127,20 +134,24 @@ TEST(InvertFit, ParametersAtTheirBoundsAreRecoveredAtTheBounds) {
 
 TEST(InvertFit, PointSamplesRecoverTheMaterial) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, "white_sphere_office.gltf", "points", "--integrator sh --ss 1 --res 128x128");
+  const std::string folder =
+      captures(dir, "white_sphere_office.gltf", "points", "--integrator sh --ss 1 --res 128x128");
   const nlohmann::json result = fit(dir, folder, "--mode material --lmax 4 --points 4000 --pixel-footprint 1");
   // Read bilinearly between pixel centres, and modelled so: exact again.
   expect_material(result, 1e-4, 1e-4);
-  EXPECT_GT(result["samples"].get<int>(), 4000);  // each point seen in several views
+  EXPECT_GT(result["samples"].get<int>(), 4000);            // each point seen in several views
   EXPECT_GT(result["dropped"]["hidden"].get<int>(), 1000);  // the far side of the sphere
 }
 
 TEST(InvertFit, PureMirrorRecoversROneAndSaysRdIsUnconstrained) {
   TemporaryDirectory dir;
   const std::string scene = sphere_scene_file(dir, 1.0f, RGB(0.3f, 0.6f, 0.9f));
-  const CommandResult render = glaze("render " + scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 64x64", dir);
+  const CommandResult render =
+      glaze("render " + scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 64x64", dir);
   ASSERT_EQ(render.exit_code, 0) << render.err;
-  const CommandResult run = glaze("invert-fit " + dir.file("mirror") + " --mode material --lmax 4 --pixel-footprint 1 --out " + dir.file("fit"), dir);
+  const CommandResult run = glaze(
+      "invert-fit " + dir.file("mirror") + " --mode material --lmax 4 --pixel-footprint 1 --out " + dir.file("fit"),
+      dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json result = read_json(dir.file("fit/fit.json"));
   EXPECT_NEAR(result["R0"].get<double>(), 1.0, 1e-6);
@@ -157,25 +168,30 @@ TEST(InvertFit, BadCaptureSetsGiveClearErrors) {
   nlohmann::json resized = transforms;
   resized["frames"][0]["file_path"] = "small.exr";
   std::ofstream(folder + "/transforms.json") << resized.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "small.exr");
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+                                "small.exr");
   // The object placed where no camera sees it.
   nlohmann::json moved = transforms;
   moved["object"]["center"] = {0.0, 50.0, 0.0};
   std::ofstream(folder + "/transforms.json") << moved.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "not visible");
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+                                "not visible");
   // No lighting to fit under.
   nlohmann::json dark = transforms;
   dark.erase("environment");
   std::ofstream(folder + "/transforms.json") << dark.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "--env");
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+                                "--env");
 }
 
 // --mode lighting (paper section 6) on noise-free captures at the scenes' own 512x512:
 // the SH coefficients for l <= 2 within 3% of L00 of the true lighting's projection, and
 // the high-resolution map, box-filtered to 64x32, within 5% over the covered directions
 // (both measured by invert-fit against the set's own environment).
-void expect_lighting_recovered(const TemporaryDirectory& dir, const std::string& scene, const std::string& environment) {
-  const std::string folder = captures(dir, scene, "lighting_" + scene, "--integrator sh --ss 1 --res 512x512 --holdout novel_0,novel_1 " + environment);
+void expect_lighting_recovered(const TemporaryDirectory& dir, const std::string& scene,
+                               const std::string& environment) {
+  const std::string folder = captures(dir, scene, "lighting_" + scene,
+                                      "--integrator sh --ss 1 --res 512x512 --holdout novel_0,novel_1 " + environment);
   const nlohmann::json result = fit(dir, folder, "--mode lighting --pixel-footprint 1");
   EXPECT_LT(result["reference_L_lm_error_l2"].get<double>(), 0.03);
   EXPECT_LT(result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(), 0.05);
@@ -226,7 +242,8 @@ TEST(InvertFitLighting, TexelsBetweenSamplesTakeTheSamplesAround) {
     EXPECT_EQ(run.exit_code, 0) << run.err;
     return nlohmann::json::parse(run.out)["L_lm"];
   };
-  const nlohmann::json recovered = projection(folder + "/fit/lighting.exr"), truth = projection(folder + "/environment.exr");
+  const nlohmann::json recovered = projection(folder + "/fit/lighting.exr"),
+                       truth = projection(folder + "/environment.exr");
   ASSERT_EQ(recovered.size(), truth.size());
   double error = 0.0, norm = 0.0;
   for (size_t i = 0; i < truth.size(); ++i)
@@ -245,15 +262,19 @@ TEST(InvertFitLighting, TexelsBetweenSamplesTakeTheSamplesAround) {
 TEST(InvertFitLighting, RmsIsTheCapturesNoise) {
   TemporaryDirectory dir;
   const std::string constant = "--env procedural:constant --res 128x128";
-  const nlohmann::json exact = fit(dir, captures(dir, "white_sphere_office.gltf", "constant_sh", "--integrator sh --ss 1 " + constant),
-                                   "--mode lighting --pixel-footprint 1");
+  const nlohmann::json exact =
+      fit(dir, captures(dir, "white_sphere_office.gltf", "constant_sh", "--integrator sh --ss 1 " + constant),
+          "--mode lighting --pixel-footprint 1");
   EXPECT_LT(exact["rms"].get<double>(), 1e-3);
   EXPECT_TRUE(exact["converged"].get<bool>());
   EXPECT_EQ(exact["iterations"].get<int>(), 0);
   std::map<int, double> rms;
   for (int spp : {16, 256})
-    rms[spp] = fit(dir, captures(dir, "white_sphere_office.gltf", "constant_" + std::to_string(spp), "--spp " + std::to_string(spp) + " " + constant),
-                   "--mode lighting")["rms"].get<double>();
+    rms[spp] = fit(dir,
+                   captures(dir, "white_sphere_office.gltf", "constant_" + std::to_string(spp),
+                            "--spp " + std::to_string(spp) + " " + constant),
+                   "--mode lighting")["rms"]
+                   .get<double>();
   EXPECT_NEAR(rms[16] / rms[256], 4.0, 0.5);
 }
 
@@ -267,10 +288,12 @@ TEST(InvertFitLighting, PathTracedCapturesConvergeWithSpp) {
                                         "--spp " + std::to_string(spp) + " --res 128x128 --holdout novel_0,novel_1");
     const nlohmann::json result = fit(dir, folder, "--mode lighting");
     sh_error[spp] = result["reference_L_lm_error_l2"].get<double>();
-    std::printf("path-traced, %d spp: L_lm (l <= 2) error %.2f%% of L00; map relative RMSE 64x32 %.1f%%, 128x64 %.1f%%, 256x128 %.1f%%\n",
-                spp, 100 * sh_error[spp], 100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
-                100 * result["reference_map_error"]["128x64"]["relative_rmse"].get<double>(),
-                100 * result["reference_map_error"]["256x128"]["relative_rmse"].get<double>());
+    std::printf(
+        "path-traced, %d spp: L_lm (l <= 2) error %.2f%% of L00; map relative RMSE 64x32 %.1f%%, 128x64 %.1f%%, "
+        "256x128 %.1f%%\n",
+        spp, 100 * sh_error[spp], 100 * result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(),
+        100 * result["reference_map_error"]["128x64"]["relative_rmse"].get<double>(),
+        100 * result["reference_map_error"]["256x128"]["relative_rmse"].get<double>());
   }
   EXPECT_LT(sh_error[256], 0.03);
 }
@@ -280,8 +303,13 @@ TEST(InvertFitLighting, PathTracedCapturesConvergeWithSpp) {
 TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
   TemporaryDirectory dir;
   const std::string mirror_scene = sphere_scene_file(dir, 0.95f, RGB::Zero());
-  ASSERT_EQ(glaze("render " + mirror_scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 256x256", dir).exit_code, 0);
-  const CommandResult mirror = glaze("invert-fit " + dir.file("mirror") + " --mode lighting --pixel-footprint 1 --out " + dir.file("mirror/fit"), dir);
+  ASSERT_EQ(
+      glaze("render " + mirror_scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 256x256",
+            dir)
+          .exit_code,
+      0);
+  const CommandResult mirror = glaze(
+      "invert-fit " + dir.file("mirror") + " --mode lighting --pixel-footprint 1 --out " + dir.file("mirror/fit"), dir);
   ASSERT_EQ(mirror.exit_code, 0) << mirror.err;
   const nlohmann::json probe = read_json(dir.file("mirror/fit/fit.json"));
   EXPECT_GT(probe["mirror_share"].get<double>(), 0.99);
@@ -290,8 +318,12 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
 
   std::filesystem::remove(mirror_scene);
   const std::string matte_scene = sphere_scene_file(dir, 0.002f, RGB::Constant(0.9f));
-  ASSERT_EQ(glaze("render " + matte_scene + " --captures " + dir.file("matte") + " --integrator sh --ss 1 --res 256x256", dir).exit_code, 0);
-  const CommandResult matte = glaze("invert-fit " + dir.file("matte") + " --mode lighting --pixel-footprint 1 --out " + dir.file("matte/fit"), dir);
+  ASSERT_EQ(
+      glaze("render " + matte_scene + " --captures " + dir.file("matte") + " --integrator sh --ss 1 --res 256x256", dir)
+          .exit_code,
+      0);
+  const CommandResult matte = glaze(
+      "invert-fit " + dir.file("matte") + " --mode lighting --pixel-footprint 1 --out " + dir.file("matte/fit"), dir);
   ASSERT_EQ(matte.exit_code, 0) << matte.err;
   EXPECT_NE(matte.err.find("matte-like"), std::string::npos) << matte.err;
   EXPECT_LT(read_json(dir.file("matte/fit/fit.json"))["reference_L_lm_error_l2"].get<double>(), 0.03);
@@ -303,7 +335,8 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
 // 3% of L00.
 void expect_joint_bounds(const TemporaryDirectory& dir, const std::string& scene, const std::string& capture_options,
                          double rd_bound = 0.003) {
-  const std::string folder = captures(dir, scene, "joint", "--integrator sh --ss 1 --holdout novel_0,novel_1 " + capture_options);
+  const std::string folder =
+      captures(dir, scene, "joint", "--integrator sh --ss 1 --holdout novel_0,novel_1 " + capture_options);
   const nlohmann::json result = fit(dir, folder, "--mode joint --pixel-footprint 1");
   EXPECT_TRUE(result["converged"].get<bool>()) << result["solver"];
   EXPECT_TRUE(result["band_limited_diffuse"].get<bool>());
@@ -344,9 +377,7 @@ TEST(InvertFitJoint, NoiseFreeStFagansMeetsTheBoundsAt512) {
 
 // Lebombo, whose sources are larger than the views' pixels, at 256x256. Measured: R0
 // within 0.0001, Rd within 0.0003, scale within 0.1% (at 512x512: Rd within 0.0001).
-TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) {
-  expect_joint_bounds_under_map("lebombo_1k.hdr", "256x256");
-}
+TEST(InvertFitJoint, NoiseFreeLebomboMeetsTheBounds) { expect_joint_bounds_under_map("lebombo_1k.hdr", "256x256"); }
 
 // studio_small_03, whose small lamps carry most of its light (256x256): the diffuse field
 // must be trimmed of the pairs near the lamps (cross_view.cpp, kTrim). Measured: R0
@@ -367,14 +398,16 @@ TEST(InvertFitJoint, StudioLampsNeedTheTrimmedDiffuseField) {
 // 64x64, quick enough for the sanitizer build.
 TEST(InvertFit, ResultsDoNotDependOnThreads) {
   TemporaryDirectory dir;
-  const std::string folder = captures(dir, "white_sphere_office.gltf", "threads", "--integrator sh --ss 1 --lmax 16 --res 64x64");
+  const std::string folder =
+      captures(dir, "white_sphere_office.gltf", "threads", "--integrator sh --ss 1 --lmax 16 --res 64x64");
   for (const char* mode : {"material", "lighting", "joint"}) {
     SCOPED_TRACE(mode);
     std::map<int, nlohmann::json> results;
     for (int threads : {1, 3}) {
       const std::string out = folder + "/fit_" + mode + "_" + std::to_string(threads);
-      const CommandResult run = glaze("invert-fit " + folder + "/transforms.json --mode " + mode + " --pixel-footprint 1 --threads " +
-                                          std::to_string(threads) + " --out " + out, dir);
+      const CommandResult run = glaze("invert-fit " + folder + "/transforms.json --mode " + mode +
+                                          " --pixel-footprint 1 --threads " + std::to_string(threads) + " --out " + out,
+                                      dir);
       ASSERT_EQ(run.exit_code, 0) << run.err;
       results[threads] = read_json(out + "/fit.json");
     }
@@ -450,9 +483,8 @@ void expect_settled_joint_fit(const nlohmann::json& result, double Rd_tolerance)
 // says that its passes had not settled: the second moved R0 by 0.02.
 TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
   TemporaryDirectory dir;
-  const std::string folder =
-      captures(dir, "white_sphere_blue_room.gltf", "full_band_ss4",
-               "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
+  const std::string folder = captures(dir, "white_sphere_blue_room.gltf", "full_band_ss4",
+                                      "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
   EXPECT_GT(fit_stopped_at_two_passes(dir, folder)["last_pass_R0_step"].get<double>(), 0.01);
   expect_settled_joint_fit(fit(dir, folder, "--mode joint"), 0.003);
 }
@@ -467,9 +499,8 @@ TEST(InvertFitJoint, PassesGoOnUntilR0Settles) {
 // by 0.066, the fit says that its passes had not settled, although R0 had.
 TEST(InvertFitJoint, PassesGoOnUntilRdSettles) {
   TemporaryDirectory dir;
-  const std::string folder =
-      captures(dir, "red_sphere_blue_room.gltf", "full_band_ss4",
-               "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
+  const std::string folder = captures(dir, "red_sphere_blue_room.gltf", "full_band_ss4",
+                                      "--integrator sh --ss 4 --lmax 16 --res 256x256 --holdout novel_0,novel_1");
   const nlohmann::json stopped = fit_stopped_at_two_passes(dir, folder);
   EXPECT_LT(stopped["last_pass_R0_step"].get<double>(), 1e-3);
   EXPECT_GT(stopped["last_pass_Rd_step"].get<double>(), 0.01);
@@ -498,7 +529,8 @@ TEST(InvertFitJoint, RdDoesNotDependOnWhereTheSolveMapsTexelEdgesFall) {
     const nlohmann::json& truth = result["reference_material"];
     EXPECT_TRUE(result["passes_settled"].get<bool>());
     EXPECT_NEAR(result["R0"].get<double>(), truth["R0"].get<double>(), 0.001);
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.01) << "channel " << c;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(result["Rd"][c].get<double>(), truth["Rd"][c].get<double>(), 0.01) << "channel " << c;
     red_errors.push_back(result["Rd"][0].get<double>() - truth["Rd"][0].get<double>());
     std::filesystem::remove_all(folder);
   }
@@ -550,7 +582,8 @@ TEST(InvertFitJoint, PathTracedStudioLampsAreNotNoise) {
 // 2.3% and 1.5%. A second fit that did nothing would fail the white sphere's 0.4%.
 TEST(InvertFitLighting, FullBandDiffuseIsModelledByASecondFit) {
   TemporaryDirectory dir;
-  for (const auto& [scene, bound] : {std::pair("white_sphere_blue_room.gltf", 0.004), std::pair("red_sphere_office.gltf", 0.012)}) {
+  for (const auto& [scene, bound] :
+       {std::pair("white_sphere_blue_room.gltf", 0.004), std::pair("red_sphere_office.gltf", 0.012)}) {
     SCOPED_TRACE(scene);
     const std::string folder = captures(dir, scene, "full_band", "--integrator sh --ss 1 --lmax 16 --res 256x256");
     const nlohmann::json result = fit(dir, folder, "--mode lighting --pixel-footprint 1");
@@ -577,7 +610,8 @@ TEST(CrossView, SmallCapturesRecoverR0) {
 TEST(InvertFitLighting, BadInputIsReported) {
   TemporaryDirectory dir;
   // One view: the mirror and the diffuse term cannot be told apart; said, not hidden.
-  const std::string one = captures(dir, "white_sphere_office.gltf", "one", "--integrator sh --ss 1 --res 128x128 --holdout view_1,view_2,novel_0,novel_1");
+  const std::string one = captures(dir, "white_sphere_office.gltf", "one",
+                                   "--integrator sh --ss 1 --res 128x128 --holdout view_1,view_2,novel_0,novel_1");
   const CommandResult single = glaze("invert-fit " + one + " --mode lighting --out " + dir.file("one_fit"), dir);
   ASSERT_EQ(single.exit_code, 0) << single.err;
   EXPECT_NE(single.err.find("two or more views"), std::string::npos) << single.err;
@@ -586,7 +620,8 @@ TEST(InvertFitLighting, BadInputIsReported) {
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(value[c].get<double>()));
   // Too few samples for 25 unknowns, and a set without a material.
   const std::string tiny = captures(dir, "white_sphere_office.gltf", "tiny", "--integrator sh --ss 1 --res 4x4");
-  testing::expect_clear_failure(glaze("invert-fit " + tiny + " --mode lighting --out " + dir.file("x"), dir), "at least 25 samples");
+  testing::expect_clear_failure(glaze("invert-fit " + tiny + " --mode lighting --out " + dir.file("x"), dir),
+                                "at least 25 samples");
   nlohmann::json transforms = read_json(one + "/transforms.json");
   transforms.erase("material");
   std::ofstream(one + "/transforms.json") << transforms.dump();
@@ -600,14 +635,18 @@ TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
   TemporaryDirectory dir;
   const std::string folder = captures(dir, "red_sphere_office.gltf", "black", "--integrator sh --ss 1 --res 48x48");
   rewrite_frames(folder, [](float, Pcg32&) { return 0.0f; });
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir), "black");
+  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+                                "black");
 
-  const std::string saturated = captures(dir, "red_sphere_office.gltf", "saturated", "--integrator sh --ss 1 --res 48x48");
+  const std::string saturated =
+      captures(dir, "red_sphere_office.gltf", "saturated", "--integrator sh --ss 1 --res 48x48");
   nlohmann::json transforms = read_json(saturated + "/transforms.json");
   transforms["saturation"] = 1e-6;
   std::ofstream(saturated + "/transforms.json") << transforms.dump(2);
-  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode material --out " + dir.file("y"), dir), "saturated");
-  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode shiny --out " + dir.file("y"), dir), "shiny");
+  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode material --out " + dir.file("y"), dir),
+                                "saturated");
+  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode shiny --out " + dir.file("y"), dir),
+                                "shiny");
 }
 
 }  // namespace

@@ -85,10 +85,11 @@ TEST(LightingData, TakingOffTheBandsAboveLmaxGivesTheBandLimitedCaptures) {
     // After: equal to float rounding (the two renders sum the bands in other orders).
     const double after = relative_difference(data.observed, expected.observed);
     EXPECT_LT(after, 1e-6);
-    std::printf("%s samples: difference %.2e before, %.2e after (relative RMS)\n", points ? "point" : "pixel", before, after);
+    std::printf("%s samples: difference %.2e before, %.2e after (relative RMS)\n", points ? "point" : "pixel", before,
+                after);
     // The observations' moments were formed again, and agree with the band-limited set's.
-    for (const auto& [moment, reference] : {std::pair(&data.ao, &expected.ao), std::pair(&data.bo, &expected.bo),
-                                            std::pair(&data.co, &expected.co)})
+    for (const auto& [moment, reference] :
+         {std::pair(&data.ao, &expected.ao), std::pair(&data.bo, &expected.bo), std::pair(&data.co, &expected.co)})
       EXPECT_LT((*moment - *reference).cwiseAbs().maxCoeff(), 2e-5 * reference->cwiseAbs().maxCoeff());
     EXPECT_LT((data.oo - expected.oo).cwiseAbs().maxCoeff(), 2e-5 * expected.oo.maxCoeff());
     // The rows and their own moments are the geometry's, left as they were.
@@ -118,7 +119,8 @@ TEST(LightingData, TapsAreWhatTheDiffuseRowsWereFormedFrom) {
         for (int m = -l; m <= l; ++m)
           c[sh_index(l, m)] += data.tap_share_g[tap] * sh_lambda(l) * sh_kernel_coefficient(l) * basis[sh_index(l, m)];
     }
-    worst = std::max(worst, (c - data.c_row(k).cast<double>()).cwiseAbs().maxCoeff() / std::abs(double(data.c_row(k)[0])));
+    worst =
+        std::max(worst, (c - data.c_row(k).cast<double>()).cwiseAbs().maxCoeff() / std::abs(double(data.c_row(k)[0])));
   }
   EXPECT_LT(worst, 1e-5);
 }

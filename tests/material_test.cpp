@@ -63,8 +63,8 @@ TEST(Material, DoesNotUseThePapersMisprintedDiffuseFactor) {
   double integral = 0;
   for (int t = 0; t < steps; ++t) {
     const double theta = (t + 0.5) * (kPiD / 2) / steps;
-    integral += white.eval_diffuse(wo, direction(float(std::cos(theta)), 0.0f))[0] * std::cos(theta) *
-                std::sin(theta) * (kPiD / 2 / steps) * 2 * kPiD;
+    integral += white.eval_diffuse(wo, direction(float(std::cos(theta)), 0.0f))[0] * std::cos(theta) * std::sin(theta) *
+                (kPiD / 2 / steps) * 2 * kPiD;
   }
   const double F = white.fresnel(mu_o);
   const double misprint = F + coat_transmittance_g(double(mu_o)) / (1 - R0);
@@ -128,7 +128,8 @@ TEST(DiffuseLobe, SamplesMatchThePdfByChiSquare) {
     ASSERT_GE(w.z(), 0.0f);
     float phi = std::atan2(w.y(), w.x());
     if (phi < 0) phi += 2 * kPi;
-    const int i = std::min(int(w.z() * mu_bins), mu_bins - 1), j = std::min(int(phi / (2 * kPi) * phi_bins), phi_bins - 1);
+    const int i = std::min(int(w.z() * mu_bins), mu_bins - 1),
+              j = std::min(int(phi / (2 * kPi) * phi_bins), phi_bins - 1);
     observed[i * phi_bins + j] += 1;
   }
   for (int i = 0; i < mu_bins; ++i) {

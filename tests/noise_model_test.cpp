@@ -57,7 +57,9 @@ std::vector<RGB> sorted_window_model(const SampleSet& set, int width, int height
   std::vector<int> at(size_t(width) * height, -1);
   for (size_t k = 0; k < set.samples.size(); ++k)
     at[size_t(set.samples[k].film.y()) * width + size_t(set.samples[k].film.x())] = int(k);
-  auto sample_at = [&](int i, int j) { return i < 0 || j < 0 || i >= width || j >= height ? -1 : at[size_t(j) * width + i]; };
+  auto sample_at = [&](int i, int j) {
+    return i < 0 || j < 0 || i >= width || j >= height ? -1 : at[size_t(j) * width + i];
+  };
   std::vector<std::optional<RGBd>> residual(at.size());
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
@@ -69,8 +71,10 @@ std::vector<RGB> sorted_window_model(const SampleSet& set, int width, int height
         for (int di = -1; di <= 1; ++di) {
           if (di == 0 && dj == 0) continue;
           const int m = sample_at(i + di, j + dj);
-          if (m < 0) whole = false;
-          else e -= set.samples[m].observed.cast<double>() * (di == 0 || dj == 0 ? 0.5 : -0.25);
+          if (m < 0)
+            whole = false;
+          else
+            e -= set.samples[m].observed.cast<double>() * (di == 0 || dj == 0 ? 0.5 : -0.25);
         }
       if (whole) residual[size_t(j) * width + i] = e.square() / 2.25;
     }
@@ -83,7 +87,8 @@ std::vector<RGB> sorted_window_model(const SampleSet& set, int width, int height
     RGBd level = RGBd::Zero();
     int neighbours = 0;
     for (const auto& [di, dj] : {std::pair(-1, 0), std::pair(1, 0), std::pair(0, -1), std::pair(0, 1)})
-      if (const int m = sample_at(i + di, j + dj); m >= 0) level += set.samples[m].observed.cast<double>(), ++neighbours;
+      if (const int m = sample_at(i + di, j + dj); m >= 0)
+        level += set.samples[m].observed.cast<double>(), ++neighbours;
     level = neighbours > 0 ? RGBd(level / neighbours) : s.observed.cast<double>();
     const RGBd floor = (kNoiseFloor * (level.abs() + offset)).square();
     std::array<std::vector<double>, 3> window;
@@ -113,7 +118,8 @@ TEST(NoiseModel, MedianNearIsTheSortedMiddleForAnyGuess) {
   std::vector<double> values, sorted;
   for (size_t n = 1; n <= 100; ++n) {
     values.resize(n + kMedianPadding);
-    for (size_t i = 0; i < n; ++i) values[i] = std::floor(8.0f * rng.next_float()) * 0.25 + (n % 3 == 0 ? rng.next_float() : 0.0);
+    for (size_t i = 0; i < n; ++i)
+      values[i] = std::floor(8.0f * rng.next_float()) * 0.25 + (n % 3 == 0 ? rng.next_float() : 0.0);
     std::fill(values.begin() + ptrdiff_t(n), values.end(), NAN);
     sorted.assign(values.begin(), values.begin() + ptrdiff_t(n));
     std::sort(sorted.begin(), sorted.end());
@@ -168,9 +174,9 @@ TEST(NoiseModel, RecoversTheVarianceOfNoiseOnASmoothImage) {
     const double x = i / double(kSize), y = j / double(kSize);
     return 1.0 + 0.5 * x - 0.3 * y + 0.8 * x * y + 0.4 * x * x * x - 0.2 * y * y * x;
   };
-  const SampleSet set = pixel_view(kSize, kSize, [](int, int) { return true; }, [&](int i, int j) {
-    return RGB::Constant(float(cubic(i, j) + noise[size_t(j) * kSize + i]));
-  });
+  const SampleSet set = pixel_view(
+      kSize, kSize, [](int, int) { return true; },
+      [&](int i, int j) { return RGB::Constant(float(cubic(i, j) + noise[size_t(j) * kSize + i])); });
   const std::vector<RGB> model = estimate_noise(observations(set), set, /*noise_free=*/false);
   std::vector<double> ratio;
   for (const RGB& v : model) ratio.push_back(v[1] / (kSigma * kSigma));

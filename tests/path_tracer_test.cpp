@@ -42,8 +42,8 @@ std::vector<std::pair<int, int>> interior_pixels(const PinholeCamera& camera, fl
 }
 
 RenderResult render_scene(const Scene& scene, const Environment& env, const PinholeCamera& camera, int spp,
-                          uint64_t seed, DirectLightEstimator estimator = DirectLightEstimator::mis,
-                          int threads = 0, int max_depth = 8) {
+                          uint64_t seed, DirectLightEstimator estimator = DirectLightEstimator::mis, int threads = 0,
+                          int max_depth = 8) {
   const RayTracer tracer(scene);
   PathTracerOptions options;
   options.estimator = estimator;
@@ -112,9 +112,12 @@ void expect_estimators_agree(const Environment& env, const char* label) {
   const auto [bsdf, bsdf_error] = region_mean(scene, env, camera, DirectLightEstimator::bsdf, 8, 16);
   const auto [light, light_error] = region_mean(scene, env, camera, DirectLightEstimator::environment, 8, 16);
   for (int c = 0; c < 3; ++c) {
-    EXPECT_LT(std::abs(mis[c] - bsdf[c]), 3 * std::hypot(mis_error[c], bsdf_error[c]) + 1e-6) << label << " channel " << c;
-    EXPECT_LT(std::abs(mis[c] - light[c]), 3 * std::hypot(mis_error[c], light_error[c]) + 1e-6) << label << " channel " << c;
-    EXPECT_LT(std::abs(bsdf[c] - light[c]), 3 * std::hypot(bsdf_error[c], light_error[c]) + 1e-6) << label << " channel " << c;
+    EXPECT_LT(std::abs(mis[c] - bsdf[c]), 3 * std::hypot(mis_error[c], bsdf_error[c]) + 1e-6)
+        << label << " channel " << c;
+    EXPECT_LT(std::abs(mis[c] - light[c]), 3 * std::hypot(mis_error[c], light_error[c]) + 1e-6)
+        << label << " channel " << c;
+    EXPECT_LT(std::abs(bsdf[c] - light[c]), 3 * std::hypot(bsdf_error[c], light_error[c]) + 1e-6)
+        << label << " channel " << c;
   }
   // MIS is never much worse than the better of the two (a sanity check on its weights).
   EXPECT_LT(mis_error[0], 1.5 * std::min(bsdf_error[0], light_error[0]) + 1e-6) << label;
@@ -168,7 +171,8 @@ RGB direct_shading(const PolishedMaterial& material, const Environment& env, con
   RGBd diffuse = RGBd::Zero();
   const Vec3 wo = Frame::from_normal(n).to_local(v);
   for (int j = 0; j < map.height; ++j) {
-    const double solid_angle = 2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
+    const double solid_angle =
+        2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
     for (int i = 0; i < map.width; ++i) {
       const Vec3 w = env.uv_to_direction(Vec2((i + 0.5f) / map.width, (j + 0.5f) / map.height));
       const float mu = n.dot(w);
@@ -209,7 +213,8 @@ TEST(PathTracer, SphereMatchesDirectIntegralOfTheShadingModel) {
       RGBd sum = RGBd::Zero();
       const int n = 4096;
       for (int k = 0; k < n; ++k)
-        sum += path_tracer.radiance(camera.generate_ray(x + rng.next_float(), y + rng.next_float()), rng).cast<double>();
+        sum +=
+            path_tracer.radiance(camera.generate_ray(x + rng.next_float(), y + rng.next_float()), rng).cast<double>();
       estimates.push_back(sum / n);
     }
     RGBd mean = RGBd::Zero(), variance = RGBd::Zero();
@@ -287,7 +292,8 @@ TEST(Render, EachCameraDrawsItsOwnStreams) {
     std::nth_element(differences.begin(), differences.begin() + differences.size() / 2, differences.end());
     return differences[differences.size() / 2];
   };
-  const double across_cameras = median_difference(first, other_camera), across_seeds = median_difference(first, other_seed);
+  const double across_cameras = median_difference(first, other_camera),
+               across_seeds = median_difference(first, other_seed);
   std::printf("median |difference|: other camera %.4g, other seed %.4g\n", across_cameras, across_seeds);
   EXPECT_GT(across_seeds, 0.0);
   EXPECT_NEAR(across_cameras / across_seeds, 1.0, 0.1);
@@ -317,9 +323,11 @@ TEST(PathTracer, BlackGroundHidesHalfOfTheSky) {
   Eigen::Affine3f pose = Eigen::Affine3f::Identity();
   pose.translation() = Vec3(0, 0, 4);
   const PinholeCamera camera = PinholeCamera::from_vertical_fov("c", pose, 0.02f, 3, 3);  // centre pixel ~ n = +Z
-  for (DirectLightEstimator estimator : {DirectLightEstimator::mis, DirectLightEstimator::bsdf, DirectLightEstimator::environment}) {
+  for (DirectLightEstimator estimator :
+       {DirectLightEstimator::mis, DirectLightEstimator::bsdf, DirectLightEstimator::environment}) {
     std::vector<float> values;
-    for (int seed = 0; seed < 6; ++seed) values.push_back(render_scene(scene, sky, camera, 2048, seed, estimator, 0, 1).image.at(1, 1)[0]);
+    for (int seed = 0; seed < 6; ++seed)
+      values.push_back(render_scene(scene, sky, camera, 2048, seed, estimator, 0, 1).image.at(1, 1)[0]);
     double mean = 0, variance = 0;
     for (float v : values) mean += v / values.size();
     for (float v : values) variance += (v - mean) * (v - mean) / (values.size() - 1);

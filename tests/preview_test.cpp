@@ -38,14 +38,15 @@ TEST(OrbitCamera, StartsAsTheSceneCameraAndKeepsThePivotInTheCentre) {
   start.camera_to_world.translation() = Vec3(0, 0, 4);
   OrbitCamera orbit(start, Vec3(0.5f, 0.2f, 0.0f));
   EXPECT_TRUE(orbit.camera().camera_to_world.isApprox(start.camera_to_world));  // roll kept
-  EXPECT_NEAR(orbit.distance(), 4.0f, 1e-5);  // the centre's depth along the axis
+  EXPECT_NEAR(orbit.distance(), 4.0f, 1e-5);                                    // the centre's depth along the axis
   EXPECT_TRUE(orbit.pivot().isApprox(Vec3(0, 0, 0), 1e-5));
 
   orbit.orbit(0.7f, 0.4f);
   EXPECT_NEAR((orbit.camera().position() - orbit.pivot()).norm(), 4.0f, 1e-4);  // on the sphere round the pivot
   const Vec2 centre = project(orbit.camera(), orbit.pivot());
-  EXPECT_NEAR(centre.x(), 32.0f, 1e-3); EXPECT_NEAR(centre.y(), 32.0f, 1e-3);  // still looked at
-  EXPECT_GT(orbit.camera().position().y(), 0.5f);                               // positive pitch: up
+  EXPECT_NEAR(centre.x(), 32.0f, 1e-3);
+  EXPECT_NEAR(centre.y(), 32.0f, 1e-3);            // still looked at
+  EXPECT_GT(orbit.camera().position().y(), 0.5f);  // positive pitch: up
   orbit.orbit(0.0f, -0.4f);
   orbit.orbit(2 * std::numbers::pi_v<float> - 0.7f, 0.0f);  // a whole turn back round
   EXPECT_TRUE(orbit.camera().position().isApprox(start.position(), 1e-4)) << orbit.camera().position().transpose();
@@ -53,7 +54,7 @@ TEST(OrbitCamera, StartsAsTheSceneCameraAndKeepsThePivotInTheCentre) {
   // Pitch never carries the view over the pole, in small steps or in one large one.
   for (int i = 0; i < 20; ++i) orbit.orbit(0.0f, 0.3f);
   Vec3 forward = -orbit.camera().camera_to_world.linear().col(2);
-  EXPECT_NEAR(std::asin(forward.y()), -89.0f * kPi / 180.0f, 1e-3);  // camera above, looking down
+  EXPECT_NEAR(std::asin(forward.y()), -89.0f * kPi / 180.0f, 1e-3);     // camera above, looking down
   EXPECT_GT(orbit.camera().camera_to_world.linear().col(1).y(), 0.0f);  // not upside down
   orbit.orbit(0.0f, -4.0f);  // one step of 229 degrees: stops at the other pole
   forward = -orbit.camera().camera_to_world.linear().col(2);
@@ -66,7 +67,8 @@ TEST(OrbitCamera, PanMovesThePointUnderTheCursorWithItAndZoomScalesTheDistance) 
   const Vec3 grabbed = orbit.pivot();  // at the centre (50, 50)
   orbit.pan(12.0f, -7.0f);             // drag 12 right, 7 up
   const Vec2 moved = project(orbit.camera(), grabbed);
-  EXPECT_NEAR(moved.x(), 62.0f, 1e-3); EXPECT_NEAR(moved.y(), 43.0f, 1e-3);
+  EXPECT_NEAR(moved.x(), 62.0f, 1e-3);
+  EXPECT_NEAR(moved.y(), 43.0f, 1e-3);
   orbit.zoom(0.5f);
   EXPECT_NEAR(orbit.distance(), 2.0f, 1e-5);
   EXPECT_NEAR((orbit.camera().position() - orbit.pivot()).norm(), 2.0f, 1e-5);
@@ -185,7 +187,8 @@ TEST(PreviewRenderer, PathFirstRendersPassesBeforeTheShImage) {
   PreviewRendererOptions options;
   options.max_spp = 10;
   options.lockstep = true;
-  PreviewRenderer renderer(s.scene, s.tracer, s.environment, s.path, options, front_camera(16), PreviewIntegrator::path);
+  PreviewRenderer renderer(s.scene, s.tracer, s.environment, s.path, options, front_camera(16),
+                           PreviewIntegrator::path);
   std::shared_ptr<const PreviewFrame> frame;
   for (int step = 1; step <= 8; ++step) {
     frame = renderer.wait_newer(frame ? frame->version : 0);
@@ -213,9 +216,9 @@ bool xvfb_works() {
   return works;
 }
 
-#define GLAZE_REQUIRE_XVFB()                                                                            \
-  if (!xvfb_works())                                                                                    \
-  GTEST_SKIP() << "no X server could be started (xvfb-run missing or Xvfb failed: apt-get install xvfb "  \
+#define GLAZE_REQUIRE_XVFB()                                                                             \
+  if (!xvfb_works())                                                                                     \
+  GTEST_SKIP() << "no X server could be started (xvfb-run missing or Xvfb failed: apt-get install xvfb " \
                   "xauth libgl1-mesa-dri); skipping the window test"
 
 testing::CommandResult glaze_in_xvfb(const std::string& arguments, const testing::TemporaryDirectory& dir) {
@@ -248,14 +251,18 @@ TEST(PreviewWindow, ShScreenshotIsTheOfflineRenderPixelForPixel) {
   // texels, so any larger difference is a defect, not rounding).
   for (const std::string display : {"", " --exposure 1.5 --tone-map aces", " --tone-map clamp --exposure -1"}) {
     const auto shot = glaze_in_xvfb("preview " + kScene + " --integrator sh --res 160x120 --frames 1 --screenshot " +
-                                        dir.file("shot.png") + display, dir);
+                                        dir.file("shot.png") + display,
+                                    dir);
     ASSERT_EQ(shot.exit_code, 0) << shot.err;
-    const auto offline = testing::run_glaze("render " + kScene + " --integrator sh --res 160x120 --out " +
-                                                dir.file("offline.png") + display, dir);
+    const auto offline = testing::run_glaze(
+        "render " + kScene + " --integrator sh --res 160x120 --out " + dir.file("offline.png") + display, dir);
     ASSERT_EQ(offline.exit_code, 0) << offline.err;
     int w1, h1, w2, h2;
     const std::vector<int> a = codes(dir.file("shot.png"), w1, h1), b = codes(dir.file("offline.png"), w2, h2);
-    ASSERT_EQ(w1, 160); ASSERT_EQ(h1, 120); ASSERT_EQ(w2, 160); ASSERT_EQ(h2, 120);
+    ASSERT_EQ(w1, 160);
+    ASSERT_EQ(h1, 120);
+    ASSERT_EQ(w2, 160);
+    ASSERT_EQ(h2, 120);
     int worst = 0;
     for (size_t k = 0; k < a.size(); ++k) worst = std::max(worst, std::abs(a[k] - b[k]));
     EXPECT_LE(worst, 1) << display;
@@ -270,11 +277,15 @@ TEST(PreviewWindow, PathScreenshotDiffersFromTheOfflineRenderOnlyByNoise) {
   GLAZE_REQUIRE_XVFB();
   testing::TemporaryDirectory dir;
   const std::string common = " --res 96x96 --tone-map clamp --exposure -1";
-  const auto shot = glaze_in_xvfb("preview " + kScene + " --integrator path --frames 32 --screenshot " +
-                                      dir.file("shot.png") + common, dir);
+  const auto shot = glaze_in_xvfb(
+      "preview " + kScene + " --integrator path --frames 32 --screenshot " + dir.file("shot.png") + common, dir);
   ASSERT_EQ(shot.exit_code, 0) << shot.err;
   for (const char* seed : {"1", "2"})
-    ASSERT_EQ(testing::run_glaze("render " + kScene + " --spp 32 --seed " + seed + " --out " + dir.file(std::string("o") + seed + ".png") + common, dir).exit_code, 0);
+    ASSERT_EQ(testing::run_glaze("render " + kScene + " --spp 32 --seed " + seed + " --out " +
+                                     dir.file(std::string("o") + seed + ".png") + common,
+                                 dir)
+                  .exit_code,
+              0);
   int w, h;
   const std::vector<int> preview = codes(dir.file("shot.png"), w, h), one = codes(dir.file("o1.png"), w, h),
                          two = codes(dir.file("o2.png"), w, h);
@@ -291,10 +302,15 @@ TEST(PreviewWindow, PathScreenshotDiffersFromTheOfflineRenderOnlyByNoise) {
 TEST(PreviewWindow, InvertFitPreviewShowsObservedPredictedAndResidual) {
   GLAZE_REQUIRE_XVFB();
   testing::TemporaryDirectory dir;
-  ASSERT_EQ(testing::run_glaze("render " + kScene + " --integrator sh --ss 1 --res 64x64 --holdout novel_0,novel_1 --captures " +
-                                   dir.file("caps"), dir).exit_code, 0);
+  ASSERT_EQ(testing::run_glaze("render " + kScene +
+                                   " --integrator sh --ss 1 --res 64x64 --holdout novel_0,novel_1 --captures " +
+                                   dir.file("caps"),
+                               dir)
+                .exit_code,
+            0);
   const auto run = glaze_in_xvfb("invert-fit " + dir.file("caps/transforms.json") + " --mode material --out " +
-                                     dir.file("fit") + " --preview --frames 2 --screenshot " + dir.file("shot.png"), dir);
+                                     dir.file("fit") + " --preview --frames 2 --screenshot " + dir.file("shot.png"),
+                                 dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   int w, h;
   const std::vector<int> shot = codes(dir.file("shot.png"), w, h);
@@ -317,7 +333,7 @@ TEST(PreviewWindow, InvertFitPreviewShowsObservedPredictedAndResidual) {
           residual_sum += shot[(row + 136 + x) * 3 + c];
         }
     EXPECT_LE(worst_observed, 1) << view;
-    EXPECT_LE(worst_predicted, 1) << view;  // the final state: the fit's own re-render
+    EXPECT_LE(worst_predicted, 1) << view;             // the final state: the fit's own re-render
     EXPECT_LT(residual_sum, 64 * 64 * 3 * 2) << view;  // sh captures fit exactly: nearly black
   }
 }
@@ -329,18 +345,22 @@ TEST(PreviewWindow, NoDisplayIsAClearError) {
   testing::expect_clear_failure(testing::run_glaze("render " + kScene + " --integrator sh --res 32x32 --captures " +
                                                        dir.file("caps") + " && env -u DISPLAY " + GLAZE_EXECUTABLE +
                                                        " invert-fit " + dir.file("caps/transforms.json") +
-                                                       " --mode material --out " + dir.file("fit") + " --preview", dir),
+                                                       " --mode material --out " + dir.file("fit") + " --preview",
+                                                   dir),
                                 "DISPLAY");
   EXPECT_FALSE(std::filesystem::exists(dir.file("fit/fit.json")));  // failed before any work
-  testing::expect_clear_failure(testing::run_glaze("preview " + kScene + " --screenshot x.png", dir, "env -u DISPLAY "), "--frames");
+  testing::expect_clear_failure(testing::run_glaze("preview " + kScene + " --screenshot x.png", dir, "env -u DISPLAY "),
+                                "--frames");
   testing::expect_clear_failure(testing::run_glaze("preview " + kScene + " --frames 1 --screenshot x.exr", dir), "PNG");
-  testing::expect_clear_failure(testing::run_glaze("preview " + kScene + " --tone-map reinhard", dir, "env -u DISPLAY "), "reinhard");
+  testing::expect_clear_failure(
+      testing::run_glaze("preview " + kScene + " --tone-map reinhard", dir, "env -u DISPLAY "), "reinhard");
 }
 #else
 TEST(PreviewWindow, BuiltWithoutThePreviewSaysSo) {
   testing::TemporaryDirectory dir;
-  testing::expect_clear_failure(testing::run_glaze("preview " + std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf", dir),
-                                "GLAZE_PREVIEW=OFF");
+  testing::expect_clear_failure(
+      testing::run_glaze("preview " + std::string(GLAZE_SOURCE_DIR) + "/scenes/red_sphere_office.gltf", dir),
+      "GLAZE_PREVIEW=OFF");
   GTEST_SKIP() << "this build leaves the preview window out (GLAZE_PREVIEW=OFF): its window tests do not apply";
 }
 #endif

@@ -28,14 +28,15 @@ using testing::read_json;
 using testing::TemporaryDirectory;
 
 nlohmann::json reproduce(const TemporaryDirectory& dir, const std::string& lightings) {
-  const testing::CommandResult run =
-      testing::run_glaze("reproduce --quick --no-convergence --lighting " + lightings + " --out " + dir.file("out"), dir);
+  const testing::CommandResult run = testing::run_glaze(
+      "reproduce --quick --no-convergence --lighting " + lightings + " --out " + dir.file("out"), dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json results = read_json(dir.file("out/results.json"));
   expect_all_finite(results["table2"], "table2");
   expect_all_finite(results["lighting"], "lighting");
   expect_all_finite(results["transfer"], "transfer");
-  for (const char* figure : {"figure5_textures", "figure6_novel_views", "figure7_transfer", "figure8_lighting", "figure9_joint"}) {
+  for (const char* figure :
+       {"figure5_textures", "figure6_novel_views", "figure7_transfer", "figure8_lighting", "figure9_joint"}) {
     const Image picture = read_image(dir.file(std::string("out/figures/") + figure + ".png"));
     EXPECT_GT(picture.width, 300) << figure;
   }
@@ -51,7 +52,8 @@ void expect_inverse_bounds(const nlohmann::json& results) {
     SCOPED_TRACE(row["lighting"].get<std::string>() + " " + row["object"].get<std::string>());
     EXPECT_NEAR(row["R0"].get<double>(), row["true_R0"].get<double>(), 0.002);
     if (row.contains("Rd"))
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(row["Rd"][c].get<double>(), row["true_Rd"][c].get<double>(), 0.005) << "channel " << c;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(row["Rd"][c].get<double>(), row["true_Rd"][c].get<double>(), 0.005) << "channel " << c;
     else
       EXPECT_LT(row["texture_rmse"].get<double>(), 0.02);
   }
@@ -125,7 +127,8 @@ TEST(PseudoBrdf, GreyIsDiagonalAndSpectralRenderMatchesRgb) {
   const ShIntegratorOptions options{4, 1, true, 1, true};
   const Image rgb = render_sh(scene, tracer, environment, camera, options);
   const Image spectral = render_sh_spectral(scene, tracer, environment, camera, options, M);
-  for (size_t i = 0; i < rgb.pixels.size(); ++i) EXPECT_NEAR(spectral.pixels[i], rgb.pixels[i], 1e-3f * (1.0f + rgb.pixels[i]));
+  for (size_t i = 0; i < rgb.pixels.size(); ++i)
+    EXPECT_NEAR(spectral.pixels[i], rgb.pixels[i], 1e-3f * (1.0f + rgb.pixels[i]));
 }
 
 // A colour within reach is seen as itself under white light (M's rows sum to it), yet M

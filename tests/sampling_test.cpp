@@ -72,7 +72,9 @@ TEST(AliasTable, TableSelectsEachOutcomeWithItsPmfEvenForExtremeWeights) {
     double total = 0;
     for (int i = 0; i < n; ++i) {
       const uint32_t kind = rng.next_uint() % 4;
-      weights[i] = kind == 0 ? 0.0f : kind == 1 ? 1e-38f * rng.next_float() : std::ldexp(rng.next_float(), int(rng.next_uint() % 10));
+      weights[i] = kind == 0   ? 0.0f
+                   : kind == 1 ? 1e-38f * rng.next_float()
+                               : std::ldexp(rng.next_float(), int(rng.next_uint() % 10));
       total += weights[i];
     }
     if (total == 0) weights[0] = 1.0f, total = 1.0;
@@ -120,7 +122,8 @@ TEST(ScrambledSobol, RandomScramblesAreUniformOnAverage) {
   for (uint32_t i : {0u, 1u, 5u, 100u}) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     const int trials = 20000;
-    for (int t = 0; t < trials; ++t) mean += scrambled_sobol_2d(i, rng.next_uint(), rng.next_uint()).cast<double>() / trials;
+    for (int t = 0; t < trials; ++t)
+      mean += scrambled_sobol_2d(i, rng.next_uint(), rng.next_uint()).cast<double>() / trials;
     EXPECT_NEAR(mean.x(), 0.5, 0.01);
     EXPECT_NEAR(mean.y(), 0.5, 0.01);
   }

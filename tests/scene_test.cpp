@@ -172,7 +172,8 @@ std::vector<unsigned char> encode_png(int width, int height, const std::vector<u
   }
   std::vector<unsigned char> zlib = {0x78, 0x01, 0x01};  // zlib header; one final stored block
   const uint16_t length = static_cast<uint16_t>(raw.size()), complement = static_cast<uint16_t>(~length);
-  zlib.insert(zlib.end(), {uint8_t(length & 0xff), uint8_t(length >> 8), uint8_t(complement & 0xff), uint8_t(complement >> 8)});
+  zlib.insert(zlib.end(),
+              {uint8_t(length & 0xff), uint8_t(length >> 8), uint8_t(complement & 0xff), uint8_t(complement >> 8)});
   zlib.insert(zlib.end(), raw.begin(), raw.end());
   uint32_t a = 1, b = 0;  // Adler-32
   for (unsigned char c : raw) a = (a + c) % 65521, b = (b + a) % 65521;
@@ -278,7 +279,8 @@ TEST(SceneLoading, GeneratedNormalsOfFlatQuadAreTheFaceNormal) {
   const Scene scene = load_scene(write_gltf(dir, "quad.gltf", gltf));
   ASSERT_EQ(scene.meshes.size(), 1u);
   ASSERT_EQ(scene.meshes[0].normals.size(), 4u);
-  for (size_t v = 0; v < 4; ++v) expect_vec_near(scene.meshes[0].normals[v], Vec3(0, -1, 0), 1e-5f, "vertex " + std::to_string(v));
+  for (size_t v = 0; v < 4; ++v)
+    expect_vec_near(scene.meshes[0].normals[v], Vec3(0, -1, 0), 1e-5f, "vertex " + std::to_string(v));
 }
 
 // An octahedron (vertices +-X, +-Y, +-Z, outward winding) without normals, under a node
@@ -300,7 +302,8 @@ TriangleMesh load_octahedron(const testing::TemporaryDirectory& dir, const Vec3&
   GltfBuffer buffer;
   const int positions = buffer.floats(vertices, 3);
   const int indices = buffer.indices(faces);
-  json gltf = gltf_document({{{"mesh", 0}, {"translation", {5, 0, 0}}, {"scale", {scale.x(), scale.y(), scale.z()}}}}, {0});
+  json gltf =
+      gltf_document({{{"mesh", 0}, {"translation", {5, 0, 0}}, {"scale", {scale.x(), scale.y(), scale.z()}}}}, {0});
   gltf["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", positions}}}, {"indices", indices}}}}}};
   buffer.into(gltf);
   const Scene scene = load_scene(write_gltf(dir, "octahedron.gltf", gltf));
@@ -380,9 +383,10 @@ TEST(SceneMaterials, IorExtensionGivesSchlickR0) {
 // extras.glaze {"R0": 0.1, "Rd": [0.5, 0.6, 0.7]} wins over baseColorFactor and ior 2.
 TEST(SceneMaterials, GlazeExtrasOverrideBaseColorAndIor) {
   testing::TemporaryDirectory dir;
-  const json materials = json::array({quiet_material({{"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.3, 0.4, 1.0}}}},
-                                          {"extensions", {{"KHR_materials_ior", {{"ior", 2.0}}}}},
-                                          {"extras", {{"glaze", {{"R0", 0.1}, {"Rd", {0.5, 0.6, 0.7}}}}}}})});
+  const json materials =
+      json::array({quiet_material({{"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.3, 0.4, 1.0}}}},
+                                   {"extensions", {{"KHR_materials_ior", {{"ior", 2.0}}}}},
+                                   {"extras", {{"glaze", {{"R0", 0.1}, {"Rd", {0.5, 0.6, 0.7}}}}}}})});
   const Scene scene = load_scene(write_gltf(dir, "extras.gltf", spheres_with_materials(materials)));
   ASSERT_EQ(scene.materials.size(), 1u);
   EXPECT_NEAR(scene.materials[0].R0, 0.1f, 1e-6f);
@@ -406,11 +410,13 @@ TEST(SceneMaterials, MetallicOrRoughnessWarnsAndZeroDoesNot) {
   const auto quiet = warnings_for(quiet_material(), "quiet.gltf");
   EXPECT_TRUE(quiet.empty()) << quiet.front();
 
-  const auto metallic = warnings_for(quiet_material({{"pbrMetallicRoughness", {{"metallicFactor", 0.5}}}}), "metal.gltf");
+  const auto metallic =
+      warnings_for(quiet_material({{"pbrMetallicRoughness", {{"metallicFactor", 0.5}}}}), "metal.gltf");
   ASSERT_EQ(metallic.size(), 1u);
   EXPECT_NE(metallic[0].find("metallicFactor"), std::string::npos) << metallic[0];
 
-  const auto rough = warnings_for(quiet_material({{"pbrMetallicRoughness", {{"roughnessFactor", 0.25}}}}), "rough.gltf");
+  const auto rough =
+      warnings_for(quiet_material({{"pbrMetallicRoughness", {{"roughnessFactor", 0.25}}}}), "rough.gltf");
   ASSERT_EQ(rough.size(), 1u);
   EXPECT_NE(rough[0].find("roughnessFactor"), std::string::npos) << rough[0];
 
@@ -424,7 +430,8 @@ TEST(SceneMaterials, OutOfRangeReflectancesAreErrors) {
   testing::TemporaryDirectory dir;
   auto error_for = [&](const json& glaze_extras, const std::string& name) -> std::string {
     try {
-      load_scene(write_gltf(dir, name, spheres_with_materials(json::array({quiet_material({{"extras", {{"glaze", glaze_extras}}}})}))));
+      load_scene(write_gltf(
+          dir, name, spheres_with_materials(json::array({quiet_material({{"extras", {{"glaze", glaze_extras}}}})}))));
     } catch (const Error& e) {
       return e.what();
     }
@@ -437,7 +444,8 @@ TEST(SceneMaterials, OutOfRangeReflectancesAreErrors) {
   const std::string above = error_for({{"R0", 1.2}}, "above.gltf");
   EXPECT_NE(above.find("R0"), std::string::npos) << above;
   // The bounds themselves are allowed.
-  EXPECT_NO_THROW(load_scene(write_gltf(dir, "edges.gltf", spheres_with_materials(json::array({quiet_material(
+  EXPECT_NO_THROW(load_scene(write_gltf(dir, "edges.gltf",
+                                        spheres_with_materials(json::array({quiet_material(
                                             {{"extras", {{"glaze", {{"R0", 1.0}, {"Rd", {1.0, 0.0, 1.0}}}}}}})})))));
 }
 
@@ -458,8 +466,9 @@ TEST(SceneMaterials, BaseColorTexturePngIsLinearisedAndMultipliesTheFactor) {
   const int uvs = buffer.floats({0, 1, 1, 1, 1, 0, 0, 0}, 2);
   const int indices = buffer.indices({0, 1, 2, 0, 2, 3});
   json gltf = gltf_document({{{"mesh", 0}}}, {0});
-  gltf["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", positions}, {"TEXCOORD_0", uvs}}},
-                                      {"indices", indices}, {"material", 0}}}}}};
+  gltf["meshes"] = {
+      {{"primitives",
+        {{{"attributes", {{"POSITION", positions}, {"TEXCOORD_0", uvs}}}, {"indices", indices}, {"material", 0}}}}}};
   gltf["materials"] = json::array({quiet_material(
       {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 1.0, 0.8, 1.0}}, {"baseColorTexture", {{"index", 0}}}}}})});
   gltf["textures"] = {{{"source", 0}}};
@@ -503,9 +512,10 @@ json camera_scene(const json& film = nullptr) {
   json side_node = {{"camera", 1}, {"translation", {0, 0, 5}}};
   json gltf = gltf_document({sphere_node(1.0), camera_node, side_node}, {0, 1, 2});
   const double yfov = 60.0 * std::numbers::pi / 180.0;
-  gltf["cameras"] = {
-      {{"name", "front"}, {"type", "perspective"}, {"perspective", {{"yfov", yfov}, {"aspectRatio", 2.0}, {"znear", 0.1}}}},
-      {{"name", "side"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}};
+  gltf["cameras"] = {{{"name", "front"},
+                      {"type", "perspective"},
+                      {"perspective", {{"yfov", yfov}, {"aspectRatio", 2.0}, {"znear", 0.1}}}},
+                     {{"name", "side"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}};
   if (!film.is_null()) gltf["scenes"][0]["extras"] = {{"glaze", {{"film", film}}}};
   return gltf;
 }
@@ -529,8 +539,8 @@ TEST(SceneCameras, DefaultFilmIs512HighWithTheCameraAspect) {
   const CameraSpec& spec = scene.camera("front");
   EXPECT_NEAR(spec.yfov, kPi / 3.0f, 1e-6f);
   EXPECT_NEAR(spec.aspect, 2.0f, 1e-6f);
-  expect_intrinsics(scene.make_camera(spec, std::nullopt), 1024, 512, 256.0f * std::sqrt(3.0f), 512.0f, 256.0f,
-                    1e-3f, 1e-4f);
+  expect_intrinsics(scene.make_camera(spec, std::nullopt), 1024, 512, 256.0f * std::sqrt(3.0f), 512.0f, 256.0f, 1e-3f,
+                    1e-4f);
 }
 
 // film {200, 100}: that size, fl_y = 50/tan(30 deg) = 50 sqrt(3); a resolution argument
@@ -598,10 +608,8 @@ json environment_scene(const json& environment) {
 // rotation and to_world are read as given.
 TEST(SceneEnvironment, FileIsResolvedBesideTheSceneAndOptionsAreRead) {
   testing::TemporaryDirectory dir;
-  const json environment = {{"file", "env.exr"},
-                            {"scale", 2},
-                            {"rotation", 90},
-                            {"to_world", {{1, 0, 0}, {0, -1, 0}, {0, 0, -1}}}};
+  const json environment = {
+      {"file", "env.exr"}, {"scale", 2}, {"rotation", 90}, {"to_world", {{1, 0, 0}, {0, -1, 0}, {0, 0, -1}}}};
   const Scene scene = load_scene(write_gltf(dir, "sub/scene.gltf", environment_scene(environment)));
   ASSERT_TRUE(scene.environment.has_value());
   EXPECT_EQ(std::filesystem::path(scene.environment->source).lexically_normal(),
@@ -708,9 +716,11 @@ TEST(RayTracer, BatchedSphereHitsMatchOneRayAtATime) {
     const int count = batch % 2 ? kLanes : 1 + batch % kLanes;
     std::array<Ray, kLanes> rays;
     for (int k = 0; k < count; ++k) {
-      const Vec3 origin = batch % 3 == 0 ? Vec3(0.2f, -0.1f, 0.3f) + 0.5f * Vec3(rng.next_float(), rng.next_float(), rng.next_float())
-                                         : Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, 4.0f);
-      const Vec3 target = Vec3(0.2f, -0.1f, 0.3f) + 2.2f * Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
+      const Vec3 origin =
+          batch % 3 == 0 ? Vec3(0.2f, -0.1f, 0.3f) + 0.5f * Vec3(rng.next_float(), rng.next_float(), rng.next_float())
+                         : Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, 4.0f);
+      const Vec3 target = Vec3(0.2f, -0.1f, 0.3f) +
+                          2.2f * Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
       rays[k] = {origin, (target - origin).normalized()};
     }
     SurfaceHits hits;
@@ -813,7 +823,8 @@ TEST(RayTracer, BatchedMeshHitsMatchOneRayAtATime) {
   Pcg32 rng(6);
   for (int count : {1, 5, kLanes}) {
     std::array<Ray, kLanes> rays;
-    for (int k = 0; k < count; ++k) rays[k] = {Vec3(3.0f * rng.next_float() - 0.5f, 3.0f * rng.next_float() - 0.5f, 3), Vec3(0, 0, -1)};
+    for (int k = 0; k < count; ++k)
+      rays[k] = {Vec3(3.0f * rng.next_float() - 0.5f, 3.0f * rng.next_float() - 0.5f, 3), Vec3(0, 0, -1)};
     SurfaceHits hits;
     tracer.intersect(rays.data(), count, hits, true);
     for (int k = 0; k < kLanes; ++k) {
@@ -838,7 +849,8 @@ TEST(RayTracer, MirroredMeshKeepsShadingNormalOnTheSideOfTheRay) {
   const int normals = buffer.floats({0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}, 3);
   const int indices = buffer.indices({0, 1, 2, 0, 2, 3});
   json gltf = gltf_document({{{"mesh", 0}, {"scale", {-1, 1, 1}}}}, {0});
-  gltf["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", positions}, {"NORMAL", normals}}}, {"indices", indices}}}}}};
+  gltf["meshes"] = {
+      {{"primitives", {{{"attributes", {{"POSITION", positions}, {"NORMAL", normals}}}, {"indices", indices}}}}}};
   buffer.into(gltf);
   const Scene scene = load_scene(write_gltf(dir, "mirrored.gltf", gltf));
   ASSERT_EQ(scene.meshes.size(), 1u);
@@ -875,7 +887,8 @@ TEST(RayTracer, SingleConvexObjectIsExactlyOneSphere) {
   EXPECT_FALSE(mesh_only.is_single_convex_object());
 
   testing::TemporaryDirectory dir;
-  EXPECT_TRUE(load_scene(write_gltf(dir, "one.gltf", gltf_document({sphere_node(1.0)}, {0}))).is_single_convex_object());
+  EXPECT_TRUE(
+      load_scene(write_gltf(dir, "one.gltf", gltf_document({sphere_node(1.0)}, {0}))).is_single_convex_object());
   json second = sphere_node(1.0);
   second["translation"] = {3, 0, 0};
   EXPECT_FALSE(load_scene(write_gltf(dir, "two.gltf", gltf_document({sphere_node(1.0), second}, {0, 1})))
@@ -895,7 +908,8 @@ json renderable_triangle_scene(GltfBuffer& buffer) {
   json gltf = gltf_document({{{"mesh", 0}}, {{"camera", 0}, {"translation", {0, 0, 5}}}}, {0, 1});
   gltf["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", positions}}}, {"indices", indices}}}}}};
   gltf["cameras"] = {{{"name", "main"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}}}}};
-  gltf["scenes"][0]["extras"] = {{"glaze", {{"environment", {{"procedural", "constant"}, {"width", 16}, {"height", 8}}}}}};
+  gltf["scenes"][0]["extras"] = {
+      {"glaze", {{"environment", {{"procedural", "constant"}, {"width", 16}, {"height", 8}}}}}};
   buffer.into(gltf);
   return gltf;
 }
@@ -908,7 +922,8 @@ void expect_load_error(const testing::TemporaryDirectory& dir, const std::string
     ADD_FAILURE() << path << ": loaded without error";
   } catch (const Error& e) {
     const std::string message = without_directory(e.what(), dir);
-    for (const std::string& word : words) EXPECT_NE(message.find(word), std::string::npos) << "'" << word << "' not in: " << message;
+    for (const std::string& word : words)
+      EXPECT_NE(message.find(word), std::string::npos) << "'" << word << "' not in: " << message;
   } catch (const std::exception& e) {
     ADD_FAILURE() << path << ": threw a non-glaze exception: " << e.what();
   }
@@ -935,7 +950,8 @@ TEST(BadScene, TheUnbrokenSceneRenders) {
   GltfBuffer buffer;
   const std::string path = write_gltf(dir, "good.gltf", renderable_triangle_scene(buffer));
   EXPECT_NO_THROW(load_scene(path));
-  const CommandResult run = run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("good.exr")) + " --res 8x8 --spp 1", dir);
+  const CommandResult run =
+      run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("good.exr")) + " --res 8x8 --spp 1", dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(std::filesystem::exists(dir.file("good.exr")));
 }
@@ -1057,7 +1073,8 @@ TEST(BadScene, UnknownCameraOnTheCommandLine) {
   GltfBuffer buffer;
   const std::string path = write_gltf(dir, "good.gltf", renderable_triangle_scene(buffer));
   expect_cli_error(dir, path, "nope", "--camera nope");
-  const CommandResult run = run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --camera nope", dir);
+  const CommandResult run =
+      run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --camera nope", dir);
   EXPECT_NE(without_directory(run.err, dir).find("main"), std::string::npos) << run.err;
 }
 
@@ -1099,22 +1116,22 @@ TEST(CaptureSet, RenderCapturesWritesTransformsAndViews) {
   json sphere = sphere_node(0.5, 0);
   sphere["translation"] = {0.1, 0.2, 0.3};
   const std::vector<json> nodes = {sphere,
-                                    {{"camera", 0}, {"translation", {0.1, 0.2, 4.3}}},
-                                    {{"camera", 1}, {"translation", {4.1, 0.2, 0.3}}, {"rotation", {0, kS, 0, kS}}},
-                                    {{"camera", 2}, {"translation", {0.1, 4.2, 0.3}}, {"rotation", {-kS, 0, 0, kS}}}};
+                                   {{"camera", 0}, {"translation", {0.1, 0.2, 4.3}}},
+                                   {{"camera", 1}, {"translation", {4.1, 0.2, 0.3}}, {"rotation", {0, kS, 0, kS}}},
+                                   {{"camera", 2}, {"translation", {0.1, 4.2, 0.3}}, {"rotation", {-kS, 0, 0, kS}}}};
   json gltf = gltf_document(nodes, {0, 1, 2, 3});
   gltf["materials"] = json::array({quiet_material({{"extras", {{"glaze", {{"R0", 0.05}, {"Rd", {0.6, 0.5, 0.4}}}}}}})});
   json cameras = json::array();
   for (const char* name : {"cam_a", "cam_b", "cam_c"})
     cameras.push_back({{"name", name}, {"type", "perspective"}, {"perspective", {{"yfov", 0.7}, {"znear", 0.1}}}});
   gltf["cameras"] = cameras;
-  gltf["scenes"][0]["extras"] = {{"glaze", {{"environment", {{"procedural", "constant"}, {"width", 16}, {"height", 8}}}}}};
+  gltf["scenes"][0]["extras"] = {
+      {"glaze", {{"environment", {{"procedural", "constant"}, {"width", 16}, {"height", 8}}}}}};
   const std::string scene = write_gltf(dir, "sphere.gltf", gltf);
   const std::filesystem::path out = dir.path() / "captures";
 
-  const CommandResult run = run_glaze("render " + quoted(scene) + " --captures " + quoted(out.string()) +
-                                          " --holdout cam_b --res 32x32 --spp 2",
-                                      dir);
+  const CommandResult run = run_glaze(
+      "render " + quoted(scene) + " --captures " + quoted(out.string()) + " --holdout cam_b --res 32x32 --spp 2", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
 
   const auto read_json = [](const std::filesystem::path& path) {
@@ -1122,16 +1139,21 @@ TEST(CaptureSet, RenderCapturesWritesTransformsAndViews) {
     EXPECT_TRUE(stream.good()) << path;
     return json::parse(stream);
   };
-  const auto expect_pose = [](const json& matrix, const std::array<std::array<float, 4>, 4>& expected, const std::string& what) {
+  const auto expect_pose = [](const json& matrix, const std::array<std::array<float, 4>, 4>& expected,
+                              const std::string& what) {
     ASSERT_EQ(matrix.size(), 4u) << what;
     for (int r = 0; r < 4; ++r) {
       ASSERT_EQ(matrix[r].size(), 4u) << what;
-      for (int c = 0; c < 4; ++c) EXPECT_NEAR(matrix[r][c].get<double>(), expected[r][c], 1e-5) << what << " (" << r << "," << c << ")";
+      for (int c = 0; c < 4; ++c)
+        EXPECT_NEAR(matrix[r][c].get<double>(), expected[r][c], 1e-5) << what << " (" << r << "," << c << ")";
     }
   };
-  const std::array<std::array<float, 4>, 4> pose_a = {{{1, 0, 0, 0.1f}, {0, 1, 0, 0.2f}, {0, 0, 1, 4.3f}, {0, 0, 0, 1}}};
-  const std::array<std::array<float, 4>, 4> pose_b = {{{0, 0, 1, 4.1f}, {0, 1, 0, 0.2f}, {-1, 0, 0, 0.3f}, {0, 0, 0, 1}}};
-  const std::array<std::array<float, 4>, 4> pose_c = {{{1, 0, 0, 0.1f}, {0, 0, 1, 4.2f}, {0, -1, 0, 0.3f}, {0, 0, 0, 1}}};
+  const std::array<std::array<float, 4>, 4> pose_a = {
+      {{1, 0, 0, 0.1f}, {0, 1, 0, 0.2f}, {0, 0, 1, 4.3f}, {0, 0, 0, 1}}};
+  const std::array<std::array<float, 4>, 4> pose_b = {
+      {{0, 0, 1, 4.1f}, {0, 1, 0, 0.2f}, {-1, 0, 0, 0.3f}, {0, 0, 0, 1}}};
+  const std::array<std::array<float, 4>, 4> pose_c = {
+      {{1, 0, 0, 0.1f}, {0, 0, 1, 4.2f}, {0, -1, 0, 0.3f}, {0, 0, 0, 1}}};
   const double fl = 16.0 / std::tan(0.35);
 
   // The training set: cam_a and cam_c, in scene order.
@@ -1215,9 +1237,8 @@ TEST(CaptureSet, UnknownHoldoutCameraIsAnError) {
   testing::TemporaryDirectory dir;
   GltfBuffer buffer;
   const std::string scene = write_gltf(dir, "good.gltf", renderable_triangle_scene(buffer));
-  const CommandResult run = run_glaze("render " + quoted(scene) + " --captures " + quoted(dir.file("caps")) +
-                                          " --holdout nope --res 8x8 --spp 1",
-                                      dir);
+  const CommandResult run = run_glaze(
+      "render " + quoted(scene) + " --captures " + quoted(dir.file("caps")) + " --holdout nope --res 8x8 --spp 1", dir);
   EXPECT_FALSE(run.crashed) << run.err;
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(without_directory(run.err, dir).find("nope"), std::string::npos) << run.err;

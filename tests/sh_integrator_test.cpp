@@ -56,7 +56,8 @@ ModelErrors measure(const std::string& environment_spec, int spp = 1024) {
   options.seed = 12;
   const Image second = render(path_tracer, camera, options).image;
   Image reference = first;
-  for (size_t i = 0; i < reference.pixels.size(); ++i) reference.pixels[i] = 0.5f * (first.pixels[i] + second.pixels[i]);
+  for (size_t i = 0; i < reference.pixels.size(); ++i)
+    reference.pixels[i] = 0.5f * (first.pixels[i] + second.pixels[i]);
 
   ModelErrors errors;
   errors.noise = 0.5 * image_error(first, second, mask).relative_rmse;
@@ -71,11 +72,12 @@ ModelErrors measure(const std::string& environment_spec, int spp = 1024) {
   const Image unclamped = render_sh(scene, tracer, environment, camera, {4, 1, true, 0, false});
   const double measured = image_error(unclamped, reference, mask).relative_rmse;
   errors.unclamped4 = std::sqrt(std::max(0.0, measured * measured - errors.noise * errors.noise));
-  std::printf("%s: reference noise %.3f%%, sh error beyond it: lmax 2 %.3f%%, 4 %.3f%%, 8 %.3f%%, 16 %.3f%%; "
-              "truncation (vs lmax 32) at lmax 4 %.3f%%, 8 %.3f%%, lmax 4 unclamped %.3f%%\n",
-              environment_spec.c_str(), 100 * errors.noise, 100 * errors.by_lmax[2], 100 * errors.by_lmax[4],
-              100 * errors.by_lmax[8], 100 * errors.by_lmax[16], 100 * errors.truncation4, 100 * errors.truncation8,
-              100 * errors.unclamped4);
+  std::printf(
+      "%s: reference noise %.3f%%, sh error beyond it: lmax 2 %.3f%%, 4 %.3f%%, 8 %.3f%%, 16 %.3f%%; "
+      "truncation (vs lmax 32) at lmax 4 %.3f%%, 8 %.3f%%, lmax 4 unclamped %.3f%%\n",
+      environment_spec.c_str(), 100 * errors.noise, 100 * errors.by_lmax[2], 100 * errors.by_lmax[4],
+      100 * errors.by_lmax[8], 100 * errors.by_lmax[16], 100 * errors.truncation4, 100 * errors.truncation8,
+      100 * errors.unclamped4);
   return errors;
 }
 
@@ -156,7 +158,8 @@ TEST(ShIntegratorStiff, SunRingsBelowZeroAndIsClampedThere) {
   }
   EXPECT_GT(diffuse_sum(towards_sun)[0], 0.0f);
   EXPECT_GT(negative, total / 50) << "expected SH ringing below zero away from a 1e5:1 sun at lmax 4";
-  std::printf("1e5:1 sun at lmax 4: %.1f%% of normals see a negative truncated diffuse sum\n", 100.0 * negative / total);
+  std::printf("1e5:1 sun at lmax 4: %.1f%% of normals see a negative truncated diffuse sum\n",
+              100.0 * negative / total);
 
   const Scene scene = sphere_scene(0.04f, RGB(0.8f, 0.5f, 0.2f));
   const RayTracer tracer(scene);
@@ -170,7 +173,8 @@ TEST(ShIntegratorStiff, SunRingsBelowZeroAndIsClampedThere) {
 TEST(ShIntegratorStiff, MirrorBlackBaseAndGrazingViewsStayFinite) {
   const Environment sun(sun_map(3e5f), {});
   const PinholeCamera camera = front_camera(64);
-  for (const auto& [R0, Rd] : {std::pair(0.999f, RGB::Zero()), std::pair(0.0f, RGB::Zero()), std::pair(0.04f, RGB::Ones())}) {
+  for (const auto& [R0, Rd] :
+       {std::pair(0.999f, RGB::Zero()), std::pair(0.0f, RGB::Zero()), std::pair(0.04f, RGB::Ones())}) {
     const Scene scene = sphere_scene(R0, Rd);
     const RayTracer tracer(scene);
     const Image image = render_sh(scene, tracer, sun, camera, {4, 4, true, 0});
@@ -182,7 +186,8 @@ TEST(ShIntegratorStiff, MirrorBlackBaseAndGrazingViewsStayFinite) {
     const Image path = render(path_tracer, camera, options).image;
     for (size_t i = 0; i < image.pixels.size(); ++i) {
       ASSERT_TRUE(std::isfinite(image.pixels[i]) && image.pixels[i] >= 0.0f) << "sh, R0 " << R0;
-      ASSERT_TRUE(std::isfinite(path.pixels[i]) && path.pixels[i] >= 0.0f) << "path, R0 " << R0 << " value " << path.pixels[i];
+      ASSERT_TRUE(std::isfinite(path.pixels[i]) && path.pixels[i] >= 0.0f)
+          << "path, R0 " << R0 << " value " << path.pixels[i];
     }
     if (Rd.maxCoeff() == 0.0f) {
       // A black base reflects only the coat's mirror: F(n.v) L(r) at every sample.
@@ -242,9 +247,11 @@ TEST(ShIntegratorSampling, RefinedPixelsTakeAFinerGridWhereTheCoarseSamplesShowA
       coarse_error += (coarse.at(x, y) - finest.at(x, y)).square().sum();
       eight_error += (uniform[8].at(x, y) - finest.at(x, y)).square().sum();
     }
-  std::printf("refined %d of %d pixels (%d on the silhouette); squared error against 16 x 16: %.3g of 2 x 2's, "
-              "%.3g of 8 x 8's\n", refined_pixels, camera.width * camera.height, silhouette_pixels,
-              refined_error / coarse_error, refined_error / eight_error);
+  std::printf(
+      "refined %d of %d pixels (%d on the silhouette); squared error against 16 x 16: %.3g of 2 x 2's, "
+      "%.3g of 8 x 8's\n",
+      refined_pixels, camera.width * camera.height, silhouette_pixels, refined_error / coarse_error,
+      refined_error / eight_error);
   EXPECT_GT(silhouette_pixels, 20);
   EXPECT_EQ(silhouette_refined, silhouette_pixels);
   EXPECT_GT(refined_pixels, silhouette_pixels);                 // the reflected window's edges too

@@ -154,7 +154,8 @@ TEST(ShProjection, SynthesisedMapProjectsBackToItsCoefficients) {
   const Mat3 frame = Eigen::AngleAxisf(-1.1f, Vec3(0.2f, 1, -0.4f).normalized()).toRotationMatrix();
   for (const Mat3& local_to_world : {Mat3(Mat3::Identity()), frame}) {
     const ShCoefficients truth = random_coefficients(4, 11);
-    const ShCoefficients projected = sh_project_latlong(synthesise(truth, local_to_world, 1024, 512), local_to_world, 4);
+    const ShCoefficients projected =
+        sh_project_latlong(synthesise(truth, local_to_world, 1024, 512), local_to_world, 4);
     double scale = 0;
     for (const RGBd& v : truth.values) scale = std::max(scale, v.abs().maxCoeff());
     for (int i = 0; i < sh_count(4); ++i)
@@ -203,7 +204,8 @@ TEST(ShDiffuseSum, WrittenOutLowBandsEqualTheRecurrence) {
         expected += sh_lambda(l) * sh_kernel_coefficient(l) * y * L.values[i];
       });
       const RGB got = sum(n);
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], expected[c], 2e-6 * (1.0 + std::abs(expected[c]))) << lmax << " " << c;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(got[c], expected[c], 2e-6 * (1.0 + std::abs(expected[c]))) << lmax << " " << c;
     }
   }
 }
@@ -229,7 +231,8 @@ TEST(ShDiffuseSum, LanesOfNormalsEqualTheRecurrenceInDouble) {
         while ((l + 1) * (l + 1) <= i) ++l;
         expected += sh_lambda(l) * sh_kernel_coefficient(l) * y * L.values[i];
       });
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[k][c], expected[c], 1e-5 * (1.0 + std::abs(expected[c]))) << lmax << " " << k;
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(got[k][c], expected[c], 1e-5 * (1.0 + std::abs(expected[c]))) << lmax << " " << k;
     }
   }
   std::vector<RGB> wrong_size(2);
@@ -273,7 +276,8 @@ TEST(ShDiffuseSum, ConvergesToTheDirectIntegralOverTheMap) {
   for (const Vec3& n : {Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0.6f, 0, 0.8f), Vec3(-0.48f, 0.6f, -0.64f)}) {
     RGBd direct = RGBd::Zero();
     for (int j = 0; j < map.height; ++j) {
-      const double solid_angle = 2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
+      const double solid_angle =
+          2 * kPiD / map.width * (std::cos(kPiD * j / map.height) - std::cos(kPiD * (j + 1) / map.height));
       for (int i = 0; i < map.width; ++i) {
         const Vec3 w = latlong_to_direction(Vec2((i + 0.5f) / map.width, (j + 0.5f) / map.height));
         const double mu = n.dot(w);

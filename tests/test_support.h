@@ -55,11 +55,11 @@ inline std::filesystem::path envmap(const std::string& name) {
   return std::filesystem::exists(path) ? path : std::filesystem::path();
 }
 
-#define GLAZE_REQUIRE_ENVMAP(variable, name)                                                        \
-  const std::filesystem::path variable = ::glaze::testing::envmap(name);                            \
-  if (variable.empty())                                                                             \
-  GTEST_SKIP() << "real environment map " << name << " not found under "                            \
-               << ::glaze::testing::data_dir() << "/envmaps (set GLAZE_DATA_DIR); skipping"
+#define GLAZE_REQUIRE_ENVMAP(variable, name)                                                             \
+  const std::filesystem::path variable = ::glaze::testing::envmap(name);                                 \
+  if (variable.empty())                                                                                  \
+  GTEST_SKIP() << "real environment map " << name << " not found under " << ::glaze::testing::data_dir() \
+               << "/envmaps (set GLAZE_DATA_DIR); skipping"
 
 // A fresh directory under the system temp dir, removed at scope exit.
 class TemporaryDirectory {
@@ -104,7 +104,8 @@ struct CommandResult {
 
 // Runs `glaze ARGUMENTS` (the build's executable), capturing stdout and stderr.
 // `prefix` runs glaze under another command (env, xvfb-run).
-inline CommandResult run_glaze(const std::string& arguments, const TemporaryDirectory& dir, const std::string& prefix = "") {
+inline CommandResult run_glaze(const std::string& arguments, const TemporaryDirectory& dir,
+                               const std::string& prefix = "") {
   const std::string err_file = dir.file("stderr.txt");
   const std::string command = prefix + std::string(GLAZE_EXECUTABLE) + " " + arguments + " 2>" + err_file;
   FILE* pipe = popen(command.c_str(), "r");
