@@ -36,9 +36,6 @@ namespace image_lookup_detail {
 // texel from where it steps, so that its rounding cannot make it step early or late.
 // The clamp only matters beyond 2^22 texels, where float quotients are too coarse.
 [[gnu::always_inline]] inline float floor_mod(float t, float n) {
-  // Within one period either side (every lookup at map coordinates in [0, 1), the
-  // environment's on each call) a select suffices; the quotient costs as much again.
-  if (t >= -n && t < 2.0f * n) return t < 0.0f ? t + n : (t >= n ? t - n : t);
   const float inverse = 1.0f / n;
   return std::clamp(t - n * std::floor(t * inverse + 0.5f * inverse), 0.0f, n - 1.0f);
 }
