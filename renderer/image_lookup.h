@@ -89,7 +89,7 @@ namespace image_lookup_detail {
 }
 
 // The value the lookup blends from `image` over footprint `at`.
-inline RGB bilinear(const Image& image, const BilinearFootprint& at) {
+[[gnu::always_inline]] inline RGB bilinear(const Image& image, const BilinearFootprint& at) {
   const RGB top = (1.0f - at.fx) * image.at(at.x0, at.y0) + at.fx * image.at(at.x1, at.y0);
   const RGB bottom = (1.0f - at.fx) * image.at(at.x0, at.y1) + at.fx * image.at(at.x1, at.y1);
   return (1.0f - at.fy) * top + at.fy * bottom;
