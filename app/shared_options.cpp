@@ -46,8 +46,7 @@ std::vector<CLI::Option*> add_camera_choice(CLI::App& app, CameraChoice& camera,
       add_reals(app, "--look-at X,Y,Z", camera.look_at, 3,
                 "the point the placed camera looks at, +Y up (default: the scene's centre)"),
       add_real(app, "--fov DEG", camera.fov_degrees,
-               "the placed camera's vertical field of view (default " + number_text(kDefaultViewYfovDegrees) + ")",
-               0.0f, 180.0f),
+               "vertical field of view (default " + number_text(kDefaultViewYfovDegrees) + ")", 0.0f, 180.0f),
   };
   for (CLI::Option* option : placement) option->excludes(name)->group("camera placement");
   return placement;
