@@ -2,6 +2,8 @@
 // closed form), a mirrored camera node, cameras named by node or glTF camera name, the
 // default view of a file without a camera, and cameras placed with --look-from, --look-at
 // and --fov. Every glTF is built in code (gltf_builder.h).
+#include "app/orbit_camera.h"
+#include "app/orbit_camera.h"
 #include "app/shared_options.h"
 #include "renderer/camera_placement.h"
 #include "renderer/environment.h"
@@ -155,6 +157,22 @@ TEST(OrthographicCamera, CaptureSetRefusesIt) {
       dir);
   expect_clear_failure(run, "orthographic");
   EXPECT_FALSE(std::filesystem::exists(dir.file("caps/view_000.exr")));
+}
+
+// The preview's orbit camera on an orthographic view (fl = 8 pixels per unit, at z = 5
+// looking along -Z): moving it would change nothing seen, so zoom 0.5 doubles fl and
+// leaves the camera where it was; a pan of 8 pixels to the right then moves the view
+// 8 / fl = 0.5 units to the left (-X), at any depth.
+TEST(OrthographicCamera, OrbitZoomMagnifiesAndPanMovesByPixelsOverFl) {
+  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+  pose.translation() = Vec3(0, 0, 5);
+  OrbitCamera orbit(PinholeCamera::orthographic("o", pose, 2.0f, 32, 32), Vec3::Zero());
+  orbit.zoom(0.5f);
+  EXPECT_EQ(orbit.camera().fl_x, 16.0f);
+  EXPECT_EQ(orbit.camera().fl_y, 16.0f);
+  expect_vec_near(orbit.camera().position(), Vec3(0, 0, 5), 0.0f, "position after zoom");
+  orbit.pan(8.0f, 0.0f);
+  expect_vec_near(orbit.camera().position(), Vec3(-0.5f, 0, 5), 1e-6f, "position after pan");
 }
 
 // A camera node scaled by -1 along X (a mirror, determinant < 0) at (0, 0, 5): the
