@@ -65,7 +65,8 @@ std::string choose_camera(Scene& scene, const CameraChoice& choice, const std::o
     scene.cameras.push_back(place_camera(scene, placement, aspect, unique_camera_name(scene, "placed")));
     return scene.cameras.back().name;
   }
-  if (scene.cameras.empty()) {
+  // The default view, unless --camera names another (whose error then lists none).
+  if (scene.cameras.empty() && (!choice.name || *choice.name == "all" || *choice.name == "default")) {
     scene.cameras.push_back(place_camera(scene, {}, aspect, "default"));
     const BoundingSphere bounds = bounding_sphere(scene);
     const Vec3 from = scene.cameras.back().camera_to_world.translation();
@@ -76,7 +77,7 @@ std::string choose_camera(Scene& scene, const CameraChoice& choice, const std::o
          "-degree vertical field of view: --look-from " + point_text(from) + " --look-at " + point_text(bounds.centre) +
          " --fov " + fov + "; change those to place the camera");
   }
-  return choice.name.value_or(scene.cameras.front().name);
+  return choice.name ? *choice.name : scene.cameras.front().name;
 }
 
 CLI::Option* add_film_resolution(CLI::App& app, std::optional<Resolution>& resolution) {

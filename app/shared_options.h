@@ -38,7 +38,8 @@ struct CameraChoice {
 std::vector<CLI::Option*> add_camera_choice(CLI::App& app, CameraChoice& camera, const std::string& name_help);
 // The name of the camera that `choice` picks in `scene`. A placed camera ("placed") is
 // added to `scene.cameras`; so is the default view ("default") when the scene has no
-// camera, with a warning that says how it was chosen and how to place one. The film
+// camera (and --camera names none, or "default" or "all"), with a warning that says how
+// it was chosen and how to place one. The film
 // size (`resolution`, else the scene's) sets how wide they see.
 std::string choose_camera(Scene& scene, const CameraChoice& choice, const std::optional<Resolution>& resolution);
 // --res WxH of the film (default: the scene's film).

@@ -28,7 +28,8 @@ const CameraSpec& Scene::camera(const std::string& name) const {
     if (!camera.camera_name.empty() && camera.camera_name != camera.name)
       known += " (glTF camera '" + camera.camera_name + "')";
   }
-  throw Error(path + ": no camera named '" + name + "' (cameras: " + (known.empty() ? "none" : known) +
+  throw Error(path + ": no camera named '" + name + "' (cameras: " +
+              (known.empty() ? "none in the file; without --camera, glaze renders a default view" : known) +
               "; a camera is named by its node's name or its glTF camera's name)");
 }
 

@@ -338,6 +338,12 @@ TEST(DefaultCamera, FileWithoutACameraRendersFramed) {
   EXPECT_LT(bottom, image.height - 1);
   EXPECT_LE(std::abs(left - (image.width - 1 - right)), 2) << left << " " << right;
   EXPECT_GT(right - left + 1, image.width / 2);
+
+  // --camera naming another camera: the error says there is none and what to do.
+  const CommandResult named = run_glaze(
+      "render " + quoted(path) + " --camera Camera --env procedural:constant --out " + quoted(dir.file("x.exr")), dir);
+  expect_clear_failure(named, "without --camera, glaze renders a default view");
+  EXPECT_EQ(named.err.find("warning"), std::string::npos) << named.err;
 }
 
 // --look-from 1,2,3 --look-at 4,2,3 --fov 90 on a 3 x 3 film: the centre pixel's ray runs
