@@ -115,8 +115,8 @@ EnvironmentSpec environment_spec(const Scene& scene, const EnvironmentOverride& 
     spec = *scene.environment;
   } else {
     throw Error(scene.path +
-                ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or "
-                "--env procedural:office");
+                ": the scene names no environment (scene.extras.glaze.environment, which files from other tools "
+                "lack); give the lighting with --env FILE (a lat-long map: .hdr, .exr) or --env procedural:office");
   }
   spec.options.scale = environment.scale.value_or(spec.options.scale);
   spec.options.rotation_degrees = environment.rotation_degrees.value_or(spec.options.rotation_degrees);

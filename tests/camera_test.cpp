@@ -339,6 +339,10 @@ TEST(DefaultCamera, FileWithoutACameraRendersFramed) {
   EXPECT_LE(std::abs(left - (image.width - 1 - right)), 2) << left << " " << right;
   EXPECT_GT(right - left + 1, image.width / 2);
 
+  // Without --env (the file has no environment either): an error that says to give one.
+  expect_clear_failure(run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("y.exr")), dir),
+                       "--env FILE (a lat-long map");
+
   // --camera naming another camera: the error says there is none and what to do.
   const CommandResult named = run_glaze(
       "render " + quoted(path) + " --camera Camera --env procedural:constant --out " + quoted(dir.file("x.exr")), dir);
