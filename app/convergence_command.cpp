@@ -36,7 +36,7 @@ namespace {
 
 struct ConvergenceCommandOptions {
   std::string scene, out;
-  std::optional<std::string> camera;
+  CameraChoice camera;
   std::optional<Resolution> resolution;
   std::optional<std::string> reference;  // --ref FILE.exr, instead of rendering it
   float reference_noise = 0.0f;
@@ -101,14 +101,13 @@ const Row* fastest_sh_within(const std::vector<Row>& rows, double target) {
 }
 
 int convergence(const ConvergenceCommandOptions& args) {
-  const Scene scene = load_scene(args.scene);
+  Scene scene = load_scene(args.scene);
   const EnvironmentSpec spec = environment_spec(scene, args.environment);
+  const PinholeCamera camera =
+      scene.make_camera(scene.camera(choose_camera(scene, args.camera, args.resolution)),
+                        args.resolution ? std::optional(args.resolution->pair()) : std::nullopt);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
-  if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  const PinholeCamera camera =
-      scene.make_camera(scene.camera(args.camera.value_or(scene.cameras.front().name)),
-                        args.resolution ? std::optional(args.resolution->pair()) : std::nullopt);
   const std::vector<uint8_t> mask = interior_mask(ray_tracer, camera);
   const std::filesystem::path out(args.out);
   std::filesystem::create_directories(out);
@@ -318,7 +317,7 @@ CommandRun declare_convergence(CLI::App& app) {
   app.description("error against run time of the path tracer and the sh integrator, against one reference");
   add_scene(app, args->scene);
   add_text(app, "--out DIR", args->out, "where the study goes")->required();
-  add_camera(app, args->camera, "which camera (default: the first)");
+  add_camera_choice(app, args->camera, "which camera, by its node's or its glTF camera's name (default: the first)");
   add_film_resolution(app, args->resolution);
   CLI::Option* reference_spp =
       add_integer(app, "--ref-spp N", args->reference_spp, 2, 1 << 24,

@@ -1,5 +1,6 @@
 #include "app/fit_preview.h"
 
+#include "app/invert_fit.h"
 #include "renderer/error.h"
 #include "renderer/sh_integrator.h"
 
@@ -94,6 +95,7 @@ void FitPreview::render_loop() {
     options.lmax = lmax_;
     options.supersampling = footprint_;
     options.black_background = true;
+    options.approximation_advice = invert_fit::kFitModelAdvice;
     // A failure here (out of memory, a lighting solve that throws) stops the preview,
     // never the fit: it is reported and the window shows no more states.
     try {

@@ -22,7 +22,9 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
                         const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
                         const std::string& prefix) {
   // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
-  const ShIntegrator integrator(scene, tracer, environment, {lmax, footprint, true, 0});
+  ShIntegratorOptions options{lmax, footprint, true, 0};
+  options.approximation_advice = kFitModelAdvice;
+  const ShIntegrator integrator(scene, tracer, environment, options);
   nlohmann::json views = nlohmann::json::array();
   for (size_t f = 0; f < frames.size(); ++f) {
     const PinholeCamera& camera = frames[f].camera;

@@ -31,6 +31,12 @@ class FitPreview;  // app/fit_preview.h (built with GLAZE_PREVIEW)
 
 namespace invert_fit {
 
+// What the sh integrator's warning about a concave object advises in invert-fit, whose
+// fits model every pixel as that integrator does (and which has no other integrator).
+inline constexpr const char* kFitModelAdvice =
+    "invert-fit models every pixel so: expect a bias where the object shadows or reflects itself, "
+    "or leave those pixels out with masks (mask_path in transforms.json)";
+
 // The command line of `glaze invert-fit` (declared in invert_command.cpp). Options left
 // empty take defaults that depend on the mode or on how the captures were rendered.
 struct InvertFitOptions {

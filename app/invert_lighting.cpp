@@ -29,8 +29,8 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
   if (R0 < 0.0f || (Rd < 0.0f).any()) {
     const std::string missing = R0 < 0.0f ? (args.R0 ? "--R0 is negative" : "R0 is not given")
                                           : (!args.Rd.empty() ? "--Rd is negative" : "Rd is not given");
-    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " +
-                captures.directory + "/transforms.json or --R0 x --Rd r,g,b (each in [0, 1])");
+    throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.file +
+                " or --R0 x --Rd r,g,b (each in [0, 1])");
   }
   return PolishedMaterial(R0, Rd);  // validates the ranges
 }

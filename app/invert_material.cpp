@@ -32,7 +32,7 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   if (args.environment.source)
     spec = EnvironmentSpec{*args.environment.source, spec ? spec->options : EnvironmentOptions{}};
   if (!spec)
-    throw Error(captures.directory + "/transforms.json names no environment: --mode " + mode +
+    throw Error(captures.file + " names no environment: --mode " + mode +
                 " needs the lighting; give --env FILE|procedural:NAME");
   spec->options.scale = args.environment.scale.value_or(spec->options.scale);
   spec->options.rotation_degrees = args.environment.rotation_degrees.value_or(spec->options.rotation_degrees);

@@ -44,13 +44,21 @@ void OrbitCamera::orbit(float yaw, float pitch) {
 
 void OrbitCamera::pan(float dx, float dy) {
   const Mat3 rotation = camera_.camera_to_world.linear();
-  // One pixel at depth d spans d / fl in world units.
-  pivot_ += rotation.col(0) * (-dx * distance_ / camera_.fl_x) + rotation.col(1) * (dy * distance_ / camera_.fl_y);
+  // One pixel at depth d spans d / fl in world units; orthographic, 1 / fl at any depth.
+  const float depth = camera_.projection == Projection::orthographic ? 1.0f : distance_;
+  pivot_ += rotation.col(0) * (-dx * depth / camera_.fl_x) + rotation.col(1) * (dy * depth / camera_.fl_y);
   place();
 }
 
 void OrbitCamera::zoom(float factor) {
   if (!(factor > 0.0f) || !std::isfinite(factor)) return;
+  if (camera_.projection == Projection::orthographic) {
+    // Moving an orthographic camera changes nothing it sees (or clips the object): it
+    // magnifies instead, as moving a pinhole closer does at the pivot.
+    camera_.fl_x /= factor;
+    camera_.fl_y /= factor;
+    return;
+  }
   distance_ = std::clamp(distance_ * factor, 1e-4f, 1e6f);
   place();
 }

@@ -7,7 +7,8 @@
 // across the view through the pivot; pitch stops 1 degree short of the poles so that "up" stays
 // defined.
 // Pan moves camera and pivot in the image plane, by image pixels at the pivot's depth
-// (the point under the cursor follows it); zoom moves the camera along its axis.
+// (the point under the cursor follows it); zoom moves the camera along its axis (an
+// orthographic camera magnifies instead).
 #pragma once
 
 #include "renderer/camera.h"
@@ -23,7 +24,8 @@ class OrbitCamera {
   void orbit(float yaw, float pitch);
   // Shifts the view by (dx, dy) image pixels at the pivot's depth (x right, y down).
   void pan(float dx, float dy);
-  // Multiplies the distance to the pivot by `factor` (> 0; < 1 moves closer).
+  // Multiplies the distance to the pivot by `factor` (> 0; < 1 moves closer); an
+  // orthographic camera's view size instead.
   void zoom(float factor);
 
   const PinholeCamera& camera() const { return camera_; }

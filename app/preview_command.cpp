@@ -8,6 +8,7 @@
 #include "app/preview_window.h"
 #include "app/shared_options.h"
 #include "app/timing.h"
+#include "renderer/camera_placement.h"
 #include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/path_tracer.h"
@@ -42,7 +43,7 @@ constexpr const char* kKeyHelp = R"(glaze preview keys:
 
 struct PreviewCommandOptions {
   std::string scene;
-  std::optional<std::string> camera;
+  CameraChoice camera;
   std::optional<Resolution> resolution;
   std::optional<std::string> integrator;  // default: sh for a single convex object, else path
   int lmax = 4, supersampling = 2;
@@ -58,16 +59,6 @@ struct PreviewCommandOptions {
 };
 
 enum class FalseColour { off, relative_error, n_dot_v };
-
-// The centre of the scene's bounding box: the orbit pivot's hint.
-Vec3 scene_centre(const Scene& scene) {
-  Eigen::AlignedBox3f box;
-  for (const Sphere& s : scene.spheres)
-    box.extend(s.center - Vec3::Constant(s.radius)), box.extend(s.center + Vec3::Constant(s.radius));
-  for (const TriangleMesh& m : scene.meshes)
-    for (const Vec3& p : m.positions) box.extend(p);
-  return box.isEmpty() ? Vec3::Zero() : Vec3(box.center());
-}
 
 // Per pixel, |Y_sh - Y_path| / Y_path: where the analytic model departs from the path
 // tracer's estimate (which is itself noisy at low spp).
@@ -142,16 +133,14 @@ int preview(const PreviewCommandOptions& args) {
   const float spin = args.spin_degrees * std::numbers::pi_v<float> / 180.0f;
   require_display("glaze render");  // before any loading: no display fails at once
 
-  const Scene scene = load_scene(args.scene);
-  if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
-  const std::string first_camera = args.camera.value_or(scene.cameras.front().name);
-  scene.camera(first_camera);  // an unknown name lists the cameras
+  Scene scene = load_scene(args.scene);
+  const EnvironmentSpec spec = environment_spec(scene, args.environment);
+  const CameraSpec* const first_camera = &scene.camera(choose_camera(scene, args.camera, args.resolution));
   ViewState view;
   view.display = args.display;
   const std::string integrator_name = args.integrator.value_or(scene.is_single_convex_object() ? "sh" : "path");
   view.integrator = preview_integrator(integrator_name);
 
-  const EnvironmentSpec spec = environment_spec(scene, args.environment);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
   PathTracerOptions path_options;
@@ -169,9 +158,8 @@ int preview(const PreviewCommandOptions& args) {
       args.resolution ? std::optional(args.resolution->pair()) : std::nullopt;
   const std::filesystem::path save_dir = args.save_dir;
 
-  size_t camera_index = 0;
-  while (scene.cameras[camera_index].name != first_camera) ++camera_index;
-  const Vec3 centre = scene_centre(scene);
+  size_t camera_index = size_t(first_camera - scene.cameras.data());
+  const Vec3 centre = bounding_sphere(scene).centre;
   OrbitCamera orbit(scene.make_camera(scene.cameras[camera_index], resolution), centre);
 
   PreviewWindow window("glaze preview", orbit.camera().width, orbit.camera().height);
@@ -346,7 +334,8 @@ CommandRun declare_preview(CLI::App& app) {
       "a window that shows the render as it refines; orbit, pan, zoom, exposure, tone mapping\n"
       "(press H in the window for the keys)");
   add_scene(app, args->scene);
-  add_camera(app, args->camera, "the camera to start from (default: the first)");
+  add_camera_choice(app, args->camera,
+                    "the camera to start from, by its node's or its glTF camera's name (default: the first)");
   add_film_resolution(app, args->resolution);
   add_integrator(app, args->integrator,
                  "shown first (default: sh for a single convex object, else path); the other follows in the\n"

@@ -27,7 +27,7 @@ struct RenderCommandOptions {
   std::string scene;
   std::string out;                      // FILE.exr, FILE.png, or DIR with --camera all
   std::optional<std::string> captures;  // or a capture set's DIR
-  std::optional<std::string> camera;
+  CameraChoice camera;
   std::optional<Resolution> resolution;
   std::string integrator = "path";
   // The path tracer.
@@ -99,7 +99,9 @@ struct Job {
 void write_captures(const Job& job, const std::string& directory, const std::vector<std::string>& holdout,
                     const Environment& environment) {
   const Scene& scene = job.scene;
-  for (const std::string& name : holdout) scene.camera(name);  // unknown names fail before any work
+  std::set<const CameraSpec*> held_out_cameras;  // unknown names fail before any work
+  for (const std::string& name : holdout) held_out_cameras.insert(&scene.camera(name));
+  for (const CameraSpec& spec : scene.cameras) check_capture_camera(scene.make_camera(spec, job.resolution));
   const std::filesystem::path root(directory);
   std::filesystem::create_directories(root / (holdout.empty() ? "" : "holdout"));
 
@@ -152,8 +154,7 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
                    : environment_file.string();
     set.environment = environment_entry;
     for (const CameraSpec& spec : scene.cameras) {
-      const bool is_holdout = std::find(holdout.begin(), holdout.end(), spec.name) != holdout.end();
-      if (is_holdout != held_out) continue;
+      if (held_out_cameras.count(&spec) != size_t(held_out)) continue;
       char file[64];
       std::snprintf(file, sizeof file, "view_%03zu.exr", set.frames.size());
       job.render_to(spec, (folder / file).string());
@@ -164,8 +165,9 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
 }
 
 int render(const RenderCommandOptions& args) {
-  const Scene scene = load_scene(args.scene);
+  Scene scene = load_scene(args.scene);
   const EnvironmentSpec spec = environment_spec(scene, args.environment);
+  const std::string camera_name = choose_camera(scene, args.camera, args.resolution);
   const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
   const RayTracer ray_tracer(scene);
 
@@ -182,7 +184,6 @@ int render(const RenderCommandOptions& args) {
   options.progress = isatty(STDERR_FILENO);
   if (args.time_budget && !args.spp) options.spp = 4;  // samples per pass
 
-  if (scene.cameras.empty()) throw Error(scene.path + ": the scene has no camera");
   ShIntegratorOptions sh;
   sh.lmax = args.lmax;
   sh.supersampling = args.supersampling;
@@ -205,7 +206,6 @@ int render(const RenderCommandOptions& args) {
     write_captures(job, *args.captures, args.holdout, environment);
     return 0;
   }
-  const std::string camera_name = args.camera.value_or(scene.cameras.front().name);
   const std::string& out = args.out;
   if (camera_name == "all") {
     std::filesystem::create_directories(out);
@@ -230,7 +230,11 @@ CommandRun declare_render(CLI::App& app) {
                                    "write a capture set of every camera for invert-fit: DIR/transforms.json and\n"
                                    "the views' EXR images (black background)");
   out->excludes(captures);
-  add_camera(app, args->camera, "which camera (default: the first); all: every camera, DIR/NAME.exr");
+  const std::vector<CLI::Option*> placement =
+      add_camera_choice(app, args->camera,
+                        "which camera, by its node's or its glTF camera's name (default: the first);\n"
+                        "all: every camera, DIR/NAME.exr");
+  for (CLI::Option* option : placement) option->excludes(captures);
   add_film_resolution(app, args->resolution);
   add_names(app, "--holdout NAME,...", args->holdout,
             "cameras held out of the capture set: written to DIR/holdout, which invert-fit re-renders")

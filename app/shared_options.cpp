@@ -1,7 +1,9 @@
 #include "app/shared_options.h"
 
+#include "renderer/camera_placement.h"
 #include "renderer/error.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 
@@ -15,8 +17,67 @@ CLI::Option* add_map_resolution(CLI::App& app, Resolution& resolution) {
   return add_resolution(app, "--res WxH", resolution, "resolution of a procedural map");
 }
 
-CLI::Option* add_camera(CLI::App& app, std::optional<std::string>& camera, const std::string& help) {
-  return add_text(app, "--camera NAME", camera, help);
+namespace {
+
+std::string unique_camera_name(const Scene& scene, std::string name) {
+  for (const CameraSpec& camera : scene.cameras)
+    if (camera.name == name) name += "_" + std::to_string(scene.cameras.size());
+  return name;
+}
+
+// As the options take them: 4 significant digits, comma-separated.
+std::string number_text(float x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", x);
+  return text;
+}
+std::string point_text(const Vec3& p) {
+  return number_text(p.x()) + "," + number_text(p.y()) + "," + number_text(p.z());
+}
+
+}  // namespace
+
+std::vector<CLI::Option*> add_camera_choice(CLI::App& app, CameraChoice& camera, const std::string& name_help) {
+  CLI::Option* name = add_text(app, "--camera NAME", camera.name, name_help);
+  const std::vector<CLI::Option*> placement = {
+      add_reals(app, "--look-from X,Y,Z", camera.look_from, 3,
+                "place a camera at this point instead (default: in front of the scene and above it,\n"
+                "far enough to see all of it)"),
+      add_reals(app, "--look-at X,Y,Z", camera.look_at, 3,
+                "the point the placed camera looks at, +Y up (default: the scene's centre)"),
+      add_real(app, "--fov DEG", camera.fov_degrees,
+               "vertical field of view (default " + number_text(kDefaultViewYfovDegrees) + ")", 0.0f, 180.0f),
+  };
+  for (CLI::Option* option : placement) option->excludes(name)->group("camera placement");
+  return placement;
+}
+
+std::string choose_camera(Scene& scene, const CameraChoice& choice, const std::optional<Resolution>& resolution) {
+  const std::pair<int, int> film = resolution ? resolution->pair() : scene.film.value_or(std::pair(1, 1));
+  const float aspect = float(film.first) / float(film.second);
+  auto vec3 = [](const std::vector<float>& v) {
+    return v.empty() ? std::nullopt : std::optional(Vec3(v[0], v[1], v[2]));
+  };
+  if (choice.placed()) {
+    const CameraPlacement placement{
+        vec3(choice.look_from), vec3(choice.look_at),
+        choice.fov_degrees ? std::optional(*choice.fov_degrees * kPi / 180.0f) : std::nullopt};
+    scene.cameras.push_back(place_camera(scene, placement, aspect, unique_camera_name(scene, "placed")));
+    return scene.cameras.back().name;
+  }
+  // The default view, unless --camera names another (whose error then lists none).
+  if (scene.cameras.empty() && (!choice.name || *choice.name == "all" || *choice.name == "default")) {
+    scene.cameras.push_back(place_camera(scene, {}, aspect, "default"));
+    const BoundingSphere bounds = bounding_sphere(scene);
+    const Vec3 from = scene.cameras.back().camera_to_world.translation();
+    const std::string fov = number_text(kDefaultViewYfovDegrees);
+    warn(scene.path + ": the file has no camera; the default view frames the scene's bounding sphere (centre " +
+         point_text(bounds.centre) + ", radius " + number_text(bounds.radius) + ") from the front (+Z), " +
+         number_text(kDefaultViewElevationDegrees) + " degrees above, with a " + fov +
+         "-degree vertical field of view: --look-from " + point_text(from) + " --look-at " + point_text(bounds.centre) +
+         " --fov " + fov + "; change those to place the camera");
+  }
+  return choice.name ? *choice.name : scene.cameras.front().name;
 }
 
 CLI::Option* add_film_resolution(CLI::App& app, std::optional<Resolution>& resolution) {
@@ -54,8 +115,8 @@ EnvironmentSpec environment_spec(const Scene& scene, const EnvironmentOverride& 
     spec = *scene.environment;
   } else {
     throw Error(scene.path +
-                ": the scene names no environment (scene.extras.glaze.environment); give --env FILE or "
-                "--env procedural:office");
+                ": the scene names no environment (scene.extras.glaze.environment, which files from other tools "
+                "lack); give the lighting with --env FILE (a lat-long map: .hdr, .exr) or --env procedural:office");
   }
   spec.options.scale = environment.scale.value_or(spec.options.scale);
   spec.options.rotation_degrees = environment.rotation_degrees.value_or(spec.options.rotation_degrees);

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace glaze {
 
@@ -24,8 +25,23 @@ CLI::Option* add_scene(CLI::App& app, std::string& scene);
 // --res WxH of a procedural map (sh, env), by default as big as a scene's.
 inline constexpr Resolution kProceduralMapResolution{1024, 512};
 CLI::Option* add_map_resolution(CLI::App& app, Resolution& resolution);
-// --camera NAME: one of the scene's cameras (default: the first).
-CLI::Option* add_camera(CLI::App& app, std::optional<std::string>& camera, const std::string& help);
+// --camera NAME: one of the scene's cameras (default: the first); or a camera placed with
+// --look-from X,Y,Z, --look-at X,Y,Z and --fov DEG (not with --camera), what is not
+// given taken from the default view (renderer/camera_placement.h).
+struct CameraChoice {
+  std::optional<std::string> name;
+  std::vector<float> look_from, look_at;  // 3 numbers, or empty when not given
+  std::optional<float> fov_degrees;
+  bool placed() const { return !look_from.empty() || !look_at.empty() || fov_degrees.has_value(); }
+};
+// Adds the four options (`name_help` says what --camera takes); returns the placement's three.
+std::vector<CLI::Option*> add_camera_choice(CLI::App& app, CameraChoice& camera, const std::string& name_help);
+// The name of the camera that `choice` picks in `scene`. A placed camera ("placed") is
+// added to `scene.cameras`; so is the default view ("default") when the scene has no
+// camera (and --camera names none, or "default" or "all"), with a warning that says how
+// it was chosen and how to place one. The film
+// size (`resolution`, else the scene's) sets how wide they see.
+std::string choose_camera(Scene& scene, const CameraChoice& choice, const std::optional<Resolution>& resolution);
 // --res WxH of the film (default: the scene's film).
 CLI::Option* add_film_resolution(CLI::App& app, std::optional<Resolution>& resolution);
 // --threads N: worker threads, 0 for all cores.

@@ -159,14 +159,13 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
     } else {
       const Eigen::Affine3f world_to_camera = camera.camera_to_world.inverse();
       for (const Vec3& point : points) {
-        const Vec3 local = world_to_camera * point;
-        if (!(local.z() < 0.0f)) continue;  // behind the camera
-        const float fx = camera.cx + camera.fl_x * local.x() / -local.z(),
-                    fy = camera.cy - camera.fl_y * local.y() / -local.z();
+        const std::optional<Vec2> film = camera.project(world_to_camera * point);
+        if (!film) continue;  // behind the camera
+        const float fx = film->x(), fy = film->y();
         if (!(fx >= 0.0f && fy >= 0.0f && fx < camera.width && fy < camera.height)) continue;
         const Ray ray = camera.generate_ray(fx, fy);
         const std::optional<SurfaceHit> hit = tracer.intersect(ray);
-        const float distance = (point - camera.position()).norm();
+        const float distance = (point - ray.origin).norm();
         if (!hit || std::abs(hit->distance - distance) > 1e-3f * distance) {
           ++dropped.hidden;  // another part of the object is in front, or the point faces away
           continue;

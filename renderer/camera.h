@@ -1,13 +1,19 @@
-// camera.h: the pinhole camera shared by glTF scenes and capture sets (docs/design.md §3).
+// camera.h: the camera model shared by glTF scenes and capture sets (docs/design.md §3):
+// a pinhole (perspective projection) or an orthographic projection.
 //
 // Intrinsics are in pixels (fl_x, fl_y, cx, cy, as nerfstudio's transforms.json); the
 // pose is camera-to-world with OpenGL axes (+X right, +Y up, looking along -Z). Pixel
-// (i, j), column i and row j from the top, has its centre at (i + 0.5, j + 0.5); the
-// camera-space direction through film point (x, y) is ((x - cx)/fl_x, -(y - cy)/fl_y, -1).
+// (i, j), column i and row j from the top, has its centre at (i + 0.5, j + 0.5), and film
+// point (x, y) has the camera-space offset (u, v) = ((x - cx)/fl_x, -(y - cy)/fl_y).
+// Perspective: every ray starts at the camera's position, along (u, v, -1). Orthographic:
+// fl_x and fl_y are pixels per world unit, and the ray starts on the film plane at
+// (u, v, 0), along -Z. The two share the intrinsics so that film size, principal point
+// and square pixels mean one thing for both.
 #pragma once
 
 #include "renderer/math.h"
 
+#include <optional>
 #include <string>
 
 namespace glaze {
@@ -17,20 +23,35 @@ struct Ray {
   Vec3 direction;  // unit length
 };
 
+enum class Projection { perspective, orthographic };
+
 struct PinholeCamera {
   std::string name;
   Eigen::Affine3f camera_to_world = Eigen::Affine3f::Identity();  // rigid: rotation + translation
   int width = 0, height = 0;
   float fl_x = 0, fl_y = 0, cx = 0, cy = 0;
+  Projection projection = Projection::perspective;
 
-  // A camera with vertical field of view `yfov` (radians) and square pixels, centred.
+  // A perspective camera with vertical field of view `yfov` (radians) and square pixels, centred.
   static PinholeCamera from_vertical_fov(std::string name, const Eigen::Affine3f& camera_to_world, float yfov,
                                          int width, int height);
+  // An orthographic camera whose film is 2 `ymag` world units high, square pixels, centred.
+  static PinholeCamera orthographic(std::string name, const Eigen::Affine3f& camera_to_world, float ymag, int width,
+                                    int height);
 
   // The ray through film point (x, y) in pixels (x to the right, y down).
   Ray generate_ray(float x, float y) const {
     const Vec3 local((x - cx) / fl_x, -(y - cy) / fl_y, -1.0f);
+    if (projection == Projection::orthographic)
+      return {camera_to_world * Vec3(local.x(), local.y(), 0.0f), -camera_to_world.linear().col(2).normalized()};
     return {camera_to_world.translation(), (camera_to_world.linear() * local).normalized()};
+  }
+  // The film point that camera-space point `local` projects to (generate_ray's inverse),
+  // or nothing when it is behind the camera (perspective) or the film plane (orthographic).
+  std::optional<Vec2> project(const Vec3& local) const {
+    if (!(local.z() < 0.0f)) return std::nullopt;
+    if (projection == Projection::orthographic) return Vec2(cx + fl_x * local.x(), cy - fl_y * local.y());
+    return Vec2(cx + fl_x * local.x() / -local.z(), cy - fl_y * local.y() / -local.z());
   }
   Vec3 position() const { return camera_to_world.translation(); }
 };

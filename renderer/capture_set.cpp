@@ -68,8 +68,16 @@ json renderer_json(const CaptureRenderer& renderer) {
 
 }  // namespace
 
+void check_capture_camera(const PinholeCamera& camera) {
+  if (camera.projection != Projection::perspective)
+    throw Error("camera '" + camera.name +
+                "' is orthographic; a capture set (transforms.json) holds pinhole cameras only: leave it out, "
+                "or give the view a perspective camera");
+}
+
 void write_transforms(const std::string& directory, const CaptureSet& captures) {
   if (captures.frames.empty()) throw Error(directory + ": a capture set needs at least one frame");
+  for (const CaptureFrame& frame : captures.frames) check_capture_camera(frame.camera);
   json root = json::object();
   const json shared = intrinsics(captures.frames.front().camera);
   bool all_shared = true;
@@ -205,6 +213,7 @@ class TransformsReader {
                frames.dump());
     CaptureSet set;
     set.directory = directory_.string();
+    set.file = file_;
     for (size_t i = 0; i < frames.size(); ++i) set.frames.push_back(frame(frames[i], i));
     set.object = object();
     set.environment = environment();

@@ -79,8 +79,12 @@ struct CaptureSet {
   std::optional<CaptureMaterial> material;
   std::optional<CaptureRenderer> renderer;
   std::string directory;            // holding the transforms.json read; empty if built in memory
+  std::string file;                 // the transforms file read (any name); empty if built in memory
   std::optional<float> saturation;  // pixel values at or above it are saturated
 };
+
+// Throws glaze::Error unless `camera` is one a capture set can hold (a pinhole).
+void check_capture_camera(const PinholeCamera& camera);
 
 // Writes DIRECTORY/transforms.json (atomically). Intrinsics shared by every frame are
 // written once at the top, others per frame.

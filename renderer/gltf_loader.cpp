@@ -209,27 +209,59 @@ class GltfLoader {
     if (!world.matrix().allFinite()) fail(what + ": transform is not finite");
 
     if (node.mesh >= 0) add_mesh(node.mesh, world, what);
-    if (node.camera >= 0) add_camera(node.camera, world, what);
+    if (node.camera >= 0) add_camera(node.camera, node.name, world, what);
     if (const Value* glaze = member(node.extras, "glaze"))
       if (const Value* sphere = member(*glaze, "sphere")) add_sphere(*sphere, world, what);
     for (int child : node.children) visit_node(child, world);
     on_path_.erase(index);
   }
 
-  void add_camera(int index, const Eigen::Affine3f& world, const std::string& what) {
+  void add_camera(int index, const std::string& node_name, const Eigen::Affine3f& world, const std::string& what) {
     if (index >= static_cast<int>(model_.cameras.size()))
       fail(what + ": camera " + std::to_string(index) + " does not exist");
     const tinygltf::Camera& camera = model_.cameras[index];
-    if (camera.type != "perspective")
-      fail(what + ": camera type '" + camera.type + "' is not supported (only perspective)");
-    // Keep the rigid part of the pose: scale in the hierarchy must not skew the rays.
-    Eigen::Affine3f pose = Eigen::Affine3f::Identity();
-    pose.linear() = world.rotation();
-    pose.translation() = world.translation();
-    std::string name = camera.name.empty() ? "camera_" + std::to_string(index) : camera.name;
+    CameraSpec spec;
+    spec.camera_name = camera.name;
+    std::string name = !node_name.empty()     ? node_name
+                       : !camera.name.empty() ? camera.name
+                                              : "camera_" + std::to_string(index);
     for (const CameraSpec& existing : scene_.cameras)
       if (existing.name == name) name += "_" + std::to_string(scene_.cameras.size());
-    scene_.cameras.push_back({name, pose, float(camera.perspective.yfov), float(camera.perspective.aspectRatio)});
+    spec.name = name;
+    spec.camera_to_world = camera_pose(world, what);
+    if (camera.type == "perspective") {
+      spec.yfov = float(camera.perspective.yfov);
+      spec.aspect = float(camera.perspective.aspectRatio);
+    } else if (camera.type == "orthographic") {
+      const double xmag = camera.orthographic.xmag, ymag = camera.orthographic.ymag;
+      if (!(xmag > 0.0 && ymag > 0.0 && std::isfinite(xmag) && std::isfinite(ymag)))
+        fail(what + ": orthographic camera " + std::to_string(index) + " needs xmag and ymag > 0 (got " +
+             std::to_string(xmag) + ", " + std::to_string(ymag) + ")");
+      spec.projection = Projection::orthographic;
+      spec.ymag = float(ymag);
+      spec.aspect = float(xmag / ymag);
+    } else {
+      fail(what + ": camera type '" + camera.type + "' is not supported (perspective or orthographic)");
+    }
+    scene_.cameras.push_back(spec);
+  }
+
+  // The camera's rigid pose: scale in the hierarchy must not skew the rays. A mirroring
+  // transform (determinant < 0) has no rotation that keeps every axis; the camera then
+  // looks along the node's -Z with the node's +Y up, and its X axis follows from those.
+  Eigen::Affine3f camera_pose(const Eigen::Affine3f& world, const std::string& what) const {
+    Eigen::Affine3f pose = Eigen::Affine3f::Identity();
+    pose.translation() = world.translation();
+    if (world.linear().determinant() >= 0.0f) {
+      pose.linear() = world.rotation();
+      return pose;
+    }
+    warn(path_ + ": " + what + ": the camera's transform mirrors (a negative scale); the camera looks along the " +
+         "node's -Z axis with its +Y up, and the picture is not mirrored");
+    const Vec3 z = world.linear().col(2).normalized();
+    const Vec3 y = (world.linear().col(1) - world.linear().col(1).dot(z) * z).normalized();
+    pose.linear() << y.cross(z), y, z;
+    return pose;
   }
 
   void add_sphere(const Value& sphere, const Eigen::Affine3f& world, const std::string& what) {

@@ -3,15 +3,34 @@
 #include "renderer/error.h"
 
 #include <cmath>
+#include <vector>
 
 namespace glaze {
 
 const CameraSpec& Scene::camera(const std::string& name) const {
   for (const CameraSpec& camera : cameras)
     if (camera.name == name) return camera;
+  std::vector<const CameraSpec*> by_camera_name;
+  for (const CameraSpec& camera : cameras)
+    if (!camera.camera_name.empty() && camera.camera_name == name) by_camera_name.push_back(&camera);
+  if (by_camera_name.size() == 1) return *by_camera_name.front();
+  auto quoted_names = [](const std::vector<const CameraSpec*>& list) {
+    std::string text;
+    for (const CameraSpec* camera : list) text += (text.empty() ? "'" : ", '") + camera->name + "'";
+    return text;
+  };
+  if (by_camera_name.size() > 1)
+    throw Error(path + ": the glTF camera '" + name + "' is used by " + std::to_string(by_camera_name.size()) +
+                " nodes; name one of them: " + quoted_names(by_camera_name));
   std::string known;
-  for (const CameraSpec& camera : cameras) known += (known.empty() ? "" : ", ") + camera.name;
-  throw Error(path + ": no camera named '" + name + "' (cameras: " + (known.empty() ? "none" : known) + ")");
+  for (const CameraSpec& camera : cameras) {
+    known += (known.empty() ? "" : ", ") + camera.name;
+    if (!camera.camera_name.empty() && camera.camera_name != camera.name)
+      known += " (glTF camera '" + camera.camera_name + "')";
+  }
+  throw Error(path + ": no camera named '" + name + "' (cameras: " +
+              (known.empty() ? "none in the file; without --camera, glaze renders a default view" : known) +
+              "; a camera is named by its node's name or its glTF camera's name)");
 }
 
 PinholeCamera Scene::make_camera(const CameraSpec& spec, std::optional<std::pair<int, int>> resolution) const {
@@ -24,6 +43,8 @@ PinholeCamera Scene::make_camera(const CameraSpec& spec, std::optional<std::pair
     const float aspect = spec.aspect > 0.0f ? spec.aspect : 1.0f;
     size = {std::max(1, static_cast<int>(std::lround(512.0f * aspect))), 512};
   }
+  if (spec.projection == Projection::orthographic)
+    return PinholeCamera::orthographic(spec.name, spec.camera_to_world, spec.ymag, size.first, size.second);
   return PinholeCamera::from_vertical_fov(spec.name, spec.camera_to_world, spec.yfov, size.first, size.second);
 }
 

@@ -42,11 +42,18 @@ struct Sphere {
   Mat3 rotation = Mat3::Identity();  // sphere frame -> world
 };
 
+// A camera as the file gives it. `name` is what the command line shows and takes: the
+// node's name, else the glTF camera's, else camera_N (N the camera's index), made unique
+// with a _K suffix (K the count of cameras before it). `camera_name`, the glTF camera's
+// own name, is taken too where it names one camera node only.
 struct CameraSpec {
   std::string name;
+  std::string camera_name;  // the glTF camera object's name, or empty
   Eigen::Affine3f camera_to_world;
-  float yfov;           // radians
-  float aspect = 0.0f;  // width / height, 0 if the file does not say
+  Projection projection = Projection::perspective;
+  float yfov = 0.0f;    // perspective: vertical field of view, radians
+  float ymag = 0.0f;    // orthographic: half the view's height, world units
+  float aspect = 0.0f;  // width / height (orthographic: xmag / ymag), 0 if the file does not say
 };
 
 struct EnvironmentSpec {
@@ -65,10 +72,13 @@ struct Scene {
   std::optional<EnvironmentSpec> environment;
   std::optional<std::pair<int, int>> film;  // scene.extras.glaze.film
 
-  // The named camera; throws glaze::Error listing the cameras when there is none.
+  // The camera that `name` names: a camera's name, else a glTF camera's own name used by
+  // one node only. Throws glaze::Error listing the names there are when there is none,
+  // and the nodes' names when the glTF camera is used by several.
   const CameraSpec& camera(const std::string& name) const;
   // Film size: `resolution` if given, else the scene's film, else 512 high with the
-  // camera's aspect ratio.
+  // camera's aspect ratio (1 when unknown). Pixels are square: the vertical field of view
+  // (perspective) or height (orthographic) is kept, the horizontal follows the film.
   PinholeCamera make_camera(const CameraSpec& spec, std::optional<std::pair<int, int>> resolution) const;
 
   // The material at a surface point with texture coordinate uv.

@@ -217,7 +217,8 @@ Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& 
   if (!scene.is_single_convex_object()) {
     warn_once(scene.path +
               ": the sh integrator assumes a single convex object under distant light; "
-              "it ignores the occlusion and interreflection of this scene (use --integrator path)");
+              "it ignores the occlusion and interreflection of this scene (" +
+              options.approximation_advice + ")");
   }
   const SampleShader shader(scene, tracer, environment, camera, options);
   const int k = options.supersampling;

@@ -34,6 +34,9 @@ struct ShIntegratorOptions {
   // rendered again with M x M samples, which replace its K x K ones. 0: off.
   int refined_supersampling = 0;
   float refine_contrast = 0.05f;
+  // What the warning for a scene it is not exact for (not one convex object) advises: the
+  // calling command's alternative.
+  std::string approximation_advice = "use --integrator path";
 };
 
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,

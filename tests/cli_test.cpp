@@ -84,13 +84,13 @@ const std::map<std::string, std::vector<std::string>> kCommandOptions = {
     {"demo", {"--out", "--spp", "--res"}},
     {"sh", {"--lmax", "--scale", "--rotation", "--to-world", "--res"}},
     {"env", {"--out", "--res"}},
-    {"render",
-     {"--out",          "--captures", "--camera",     "--res",       "--holdout",     "--env",       "--env-scale",
-      "--env-rotation", "--threads",  "--integrator", "--spp",       "--time-budget", "--max-depth", "--estimator",
-      "--seed",         "--lmax",     "--ss",         "--ss-refine", "--exposure",    "--tone-map"}},
+    {"render", {"--out",       "--captures",     "--camera",    "--res",        "--holdout", "--env",
+                "--env-scale", "--env-rotation", "--threads",   "--integrator", "--spp",     "--time-budget",
+                "--max-depth", "--estimator",    "--seed",      "--lmax",       "--ss",      "--ss-refine",
+                "--exposure",  "--tone-map",     "--look-from", "--look-at",    "--fov"}},
     {"convergence",
      {"--out", "--camera", "--res", "--ref-spp", "--ref", "--ref-noise", "--max-spp", "--seed", "--threads",
-      "--max-depth", "--env", "--env-scale", "--env-rotation"}},
+      "--max-depth", "--env", "--env-scale", "--env-rotation", "--look-from", "--look-at", "--fov"}},
     {"invert-fit", {"--mode",    "--out",          "--lmax",         "--pixel-footprint",
                     "--points",  "--seed",         "--min-cos",      "--max-iterations",
                     "--env",     "--env-scale",    "--env-rotation", "--holdout-dir",
@@ -100,8 +100,9 @@ const std::map<std::string, std::vector<std::string>> kCommandOptions = {
                     "--frames",  "--screenshot",   "--exposure",     "--tone-map"}},
 #if GLAZE_HAVE_PREVIEW
     {"preview",
-     {"--camera", "--res", "--integrator", "--lmax", "--ss", "--max-spp", "--seed", "--threads", "--max-depth", "--env",
-      "--env-scale", "--env-rotation", "--exposure", "--tone-map", "--save-dir", "--frames", "--screenshot", "--spin"}},
+     {"--camera",   "--res",       "--integrator", "--lmax",      "--ss",           "--max-spp",  "--seed",
+      "--threads",  "--max-depth", "--env",        "--env-scale", "--env-rotation", "--exposure", "--tone-map",
+      "--save-dir", "--frames",    "--screenshot", "--spin",      "--look-from",    "--look-at",  "--fov"}},
 #else
     {"preview", {}},
 #endif
@@ -142,7 +143,8 @@ TEST(Cli, EveryCommandHasItsOwnHelp) {
 // Declared once, the options that several commands take have the same bounds in each.
 TEST(Cli, SharedOptionsHaveOneBound) {
   testing::TemporaryDirectory dir;
-  for (const std::string option : {"--threads", "--seed", "--max-depth", "--env-scale", "--exposure", "--tone-map"}) {
+  for (const std::string option :
+       {"--threads", "--seed", "--max-depth", "--env-scale", "--exposure", "--tone-map", "--fov"}) {
     std::string bounds;
     for (const auto& [command, options] : kCommandOptions) {
       if (std::find(options.begin(), options.end(), option) == options.end()) continue;

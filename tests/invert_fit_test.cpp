@@ -649,5 +649,40 @@ TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
                                 "shiny");
 }
 
+// A mesh capture set (the still life): the fit's warning that its model ignores occlusion
+// and interreflection advises what invert-fit offers (masks), not --integrator, which
+// invert-fit refuses.
+TEST(InvertFit, MeshCapturesWarnWithAdviceInvertFitAccepts) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "still_life_office.gltf", "still", "--integrator sh --ss 1 --res 48x36");
+  const CommandResult run = glaze("invert-fit " + folder + " --mode material --out " + dir.file("fit"), dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("occlusion and interreflection"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("mask_path"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("--integrator"), std::string::npos) << run.err;
+  const CommandResult refused =
+      glaze("invert-fit " + folder + " --mode material --integrator path --out " + dir.file("fit2"), dir);
+  EXPECT_EQ(refused.exit_code, 1) << "invert-fit took --integrator; the advice above may name it again";
+}
+
+// A transforms file under another name (views.json): the errors for a missing environment
+// (--mode material) and a missing material (--mode lighting) name that file, not
+// DIR/transforms.json.
+TEST(InvertFit, MissingEnvironmentOrMaterialNamesTheFileGiven) {
+  TemporaryDirectory dir;
+  const std::string folder = captures(dir, "red_sphere_office.gltf", "renamed", "--integrator sh --ss 1 --res 32x32");
+  nlohmann::json transforms = read_json(folder + "/transforms.json");
+  transforms.erase("environment");
+  transforms.erase("material");
+  std::filesystem::remove(folder + "/transforms.json");
+  std::ofstream(folder + "/views.json") << transforms.dump(2);
+  for (const char* mode : {"material", "lighting"}) {
+    const CommandResult run =
+        glaze("invert-fit " + folder + "/views.json --mode " + mode + " --out " + dir.file(mode), dir);
+    testing::expect_clear_failure(run, folder + "/views.json");
+    EXPECT_EQ(run.err.find("transforms.json"), std::string::npos) << run.err;
+  }
+}
+
 }  // namespace
 }  // namespace glaze
