@@ -4,23 +4,37 @@
 // file gives a glaze::Error naming the element at fault instead of undefined behaviour.
 // Images are decoded by OpenImageIO (tinygltf's own decoder is bypassed) so that EXR
 // textures work and 8-bit ones are linearised from sRGB like every other image in glaze.
+// Draco-compressed primitives are decoded here with the Draco library (Debian's tinygltf
+// is built without it). What a file uses that glaze does not model is counted and
+// reported in one warning per scene; what glaze cannot read at all (a required extension
+// it does not know, meshopt-compressed buffers) is refused by name.
 #include "renderer/error.h"
 #include "renderer/scene.h"
 
 #include <tiny_gltf.h>
 
+#include <draco/compression/decode.h>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <set>
 
 namespace glaze {
 namespace {
 
 using tinygltf::Value;
+
+// The extensions glaze reads (docs/guide.md lists what it does with the rest of glTF).
+const std::set<std::string> kSupportedExtensions = {"KHR_materials_ior", "KHR_texture_transform",
+                                                    "KHR_draco_mesh_compression", "KHR_mesh_quantization"};
 
 class GltfLoader {
  public:
@@ -51,6 +65,7 @@ class GltfLoader {
     }
     if (scene_.meshes.empty() && scene_.spheres.empty())
       fail("the scene contains no geometry (no mesh and no glaze sphere)");
+    warn_about_ignored_features();
     return std::move(scene_);
   }
 
@@ -63,14 +78,96 @@ class GltfLoader {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path_, ec))
       throw Error(path_ + ": no such scene file (expected a .gltf or .glb glTF 2.0 file)");
+    std::ifstream stream(path_, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
+    if (!stream.good() && !stream.eof()) fail("cannot be read");
+    const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
+    without_draco_indices(bytes, binary);
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&GltfLoader::decode_image, this);
     std::string error, warning;
-    const bool binary = path_.size() >= 4 && path_.compare(path_.size() - 4, 4, ".glb") == 0;
-    const bool ok = binary ? loader.LoadBinaryFromFile(&model_, &error, &warning, path_)
-                           : loader.LoadASCIIFromFile(&model_, &error, &warning, path_);
+    const std::string base = directory().string();
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    const bool ok =
+        binary ? loader.LoadBinaryFromMemory(&model_, &error, &warning, data, unsigned(bytes.size()), base)
+               : loader.LoadASCIIFromString(&model_, &error, &warning, bytes.data(), unsigned(bytes.size()), base);
     if (!warning.empty()) warn(path_ + ": " + warning);
+    // Before any other error: an unknown required extension explains the rest.
+    std::string unsupported;
+    for (const std::string& extension : model_.extensionsRequired)
+      if (!kSupportedExtensions.count(extension)) unsupported.append(unsupported.empty() ? "" : ", ").append(extension);
+    if (!unsupported.empty())
+      fail("requires glTF extensions that glaze does not support: " + unsupported +
+           " (glaze reads KHR_materials_ior, KHR_texture_transform, KHR_draco_mesh_compression and "
+           "KHR_mesh_quantization; convert the file without the others, e.g. `gltf-transform copy IN OUT` "
+           "decompresses meshopt and `gltf-transform png IN OUT` re-encodes KTX2/Basis textures)");
     if (!ok) fail("cannot be loaded as glTF 2.0: " + (error.empty() ? std::string("unknown error") : error));
+  }
+
+  // One warning listing what the file uses that glaze does not model, with counts.
+  void warn_about_ignored_features() {
+    for (const auto& node : model_.nodes)
+      if (node.skin >= 0) ++ignored_["skinned nodes"];
+    for (const auto& mesh : model_.meshes)
+      for (const auto& primitive : mesh.primitives)
+        if (!primitive.targets.empty()) ++ignored_["primitives with morph targets"];
+    if (!model_.animations.empty()) ignored_["animations"] += int(model_.animations.size());
+    if (!model_.lights.empty()) ignored_["punctual lights (KHR_lights_punctual)"] = int(model_.lights.size());
+    // Extensions the file declares that no count above names (EXT_mesh_gpu_instancing, ...).
+    for (const std::string& extension : model_.extensionsUsed) {
+      const bool counted = std::any_of(ignored_.begin(), ignored_.end(), [&](const auto& entry) {
+        return entry.first.find(extension) != std::string::npos;
+      });
+      if (!kSupportedExtensions.count(extension) && !counted) ignored_["extension " + extension] = 1;
+    }
+    if (ignored_.empty()) return;
+    std::string list;
+    for (const auto& [feature, count] : ignored_)
+      list += (list.empty() ? "" : "; ") + feature + ": " + std::to_string(count);
+    warn(path_ + ": glaze does not model, and ignores: " + list +
+         ". Its material is a smooth dielectric coat (R0, from KHR_materials_ior) over a diffuse base "
+         "(baseColor); see docs/guide.md for each glTF feature.");
+  }
+
+  // tinygltf, built without Draco, refuses a primitive whose indices accessor has no
+  // bufferView, which is how Draco-compressed primitives are written. Their indices come
+  // from the Draco data, so the reference is dropped from the JSON (the .glb's JSON chunk)
+  // before tinygltf reads it. Files without Draco are handed over untouched.
+  void without_draco_indices(std::string& bytes, bool binary) const {
+    const std::string_view draco = "KHR_draco_mesh_compression";
+    if (bytes.find(draco) == std::string::npos) return;
+    size_t json_begin = 0, json_size = bytes.size();
+    if (binary) {
+      uint32_t chunk_size = 0, chunk_type = 0;
+      if (bytes.size() < 20) fail("the .glb file is truncated");
+      std::memcpy(&chunk_size, bytes.data() + 12, 4);
+      std::memcpy(&chunk_type, bytes.data() + 16, 4);
+      if (chunk_type != 0x4E4F534Au || 20 + size_t(chunk_size) > bytes.size())
+        fail("the .glb file's first chunk is not its JSON");
+      json_begin = 20, json_size = chunk_size;
+    }
+    nlohmann::json document =
+        nlohmann::json::parse(bytes.begin() + json_begin, bytes.begin() + json_begin + json_size, nullptr, false);
+    if (!document.is_object() || !document.contains("meshes") || !document["meshes"].is_array()) return;
+    for (auto& mesh : document["meshes"])
+      if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
+        for (auto& primitive : mesh["primitives"])
+          if (primitive.is_object() && primitive.contains("extensions") && primitive["extensions"].is_object() &&
+              primitive["extensions"].contains(draco))
+            primitive.erase("indices");
+    std::string text = document.dump();
+    if (!binary) {
+      bytes = std::move(text);
+      return;
+    }
+    text.append((4 - text.size() % 4) % 4, ' ');  // chunks are 4-byte aligned, JSON padded with spaces
+    const std::string rest = bytes.substr(json_begin + json_size);
+    const uint32_t chunk_size = uint32_t(text.size()), total = uint32_t(12 + 8 + text.size() + rest.size());
+    std::string glb = bytes.substr(0, 20);
+    std::memcpy(glb.data() + 8, &total, 4);
+    std::memcpy(glb.data() + 12, &chunk_size, 4);
+    glb.append(text).append(rest);
+    bytes = std::move(glb);
   }
 
   // tinygltf hands every image's bytes here (external file, data URI or .glb chunk).
@@ -115,13 +212,22 @@ class GltfLoader {
       const auto& pbr = source.pbrMetallicRoughness;
       if (pbr.baseColorFactor.size() >= 3)
         material.Rd = RGB(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
-      if (pbr.baseColorTexture.index >= 0) material.texture = texture(pbr.baseColorTexture.index, what);
-      if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor > 0.0) {
-        warn(path_ + ": " + what + " has metallicFactor " + std::to_string(pbr.metallicFactor) +
-             " and roughnessFactor " + std::to_string(pbr.roughnessFactor) +
-             "; glaze's coat is a perfect dielectric mirror over a diffuse base, "
-             "so both are ignored (set them to 0 to silence this)");
+      if (pbr.baseColorTexture.index >= 0) {
+        material.texture = texture(pbr.baseColorTexture.index, what);
+        material.texcoord = pbr.baseColorTexture.texCoord;
+        read_texture_transform(pbr.baseColorTexture.extensions, material, what);
       }
+      if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor > 0.0 || pbr.metallicRoughnessTexture.index >= 0)
+        ++ignored_["materials with metallic/roughness"];
+      if (source.normalTexture.index >= 0) ++ignored_["materials with normal maps"];
+      if (source.occlusionTexture.index >= 0) ++ignored_["materials with occlusion maps"];
+      if (source.emissiveTexture.index >= 0 ||
+          std::any_of(source.emissiveFactor.begin(), source.emissiveFactor.end(), [](double e) { return e > 0.0; }))
+        ++ignored_["emissive materials"];
+      if (source.alphaMode == "BLEND" || source.alphaMode == "MASK")
+        ++ignored_["materials with alphaMode " + source.alphaMode];
+      for (const auto& [extension, value] : source.extensions)
+        if (extension != "KHR_materials_ior") ++ignored_["materials with " + extension];
       if (const auto it = source.extensions.find("KHR_materials_ior"); it != source.extensions.end()) {
         if (const Value* ior_value = member(it->second, "ior")) {
           const double ior = number(*ior_value, what + " KHR_materials_ior.ior");
@@ -147,13 +253,41 @@ class GltfLoader {
     }
   }
 
+  // KHR_texture_transform on a texture reference: uv' = T R S uv (its texCoord overrides).
+  void read_texture_transform(const tinygltf::ExtensionMap& extensions, SceneMaterial& material,
+                              const std::string& what) const {
+    const auto it = extensions.find("KHR_texture_transform");
+    if (it == extensions.end()) return;
+    const std::string where = what + " KHR_texture_transform";
+    const auto pair = [&](const char* key, float fallback) -> Vec2 {
+      const Value* value = member(it->second, key);
+      if (!value) return Vec2(fallback, fallback);
+      if (!value->IsArray() || value->ArrayLen() != 2) fail(where + "." + key + " must be an array of 2 numbers");
+      return {float(number(value->Get(0), where + "." + key)), float(number(value->Get(1), where + "." + key))};
+    };
+    const Vec2 offset = pair("offset", 0.0f), scale = pair("scale", 1.0f);
+    const Value* rotation_value = member(it->second, "rotation");
+    const float rotation = rotation_value ? float(number(*rotation_value, where + ".rotation")) : 0.0f;
+    const float c = std::cos(rotation), s = std::sin(rotation);
+    material.uv_transform << c * scale.x(), s * scale.y(), offset.x(), -s * scale.x(), c * scale.y(), offset.y();
+    if (const Value* texcoord = member(it->second, "texCoord"))
+      material.texcoord = int(number(*texcoord, where + ".texCoord"));
+  }
+
+  static Wrap wrap_mode(int gl_mode) {
+    return gl_mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? Wrap::clamp
+           : gl_mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? Wrap::mirrored_repeat
+                                                              : Wrap::repeat;
+  }
+
   int texture(int index, const std::string& what) {
     if (index < 0 || index >= static_cast<int>(model_.textures.size()))
       fail(what + ": baseColorTexture index " + std::to_string(index) + " does not exist");
     const int source = model_.textures[index].source;
     if (source < 0 || source >= static_cast<int>(model_.images.size()))
-      fail(what + ": texture " + std::to_string(index) + " has no image (source " + std::to_string(source) + ")");
-    if (const auto it = texture_of_image_.find(source); it != texture_of_image_.end()) return it->second;
+      fail(what + ": texture " + std::to_string(index) + " has no image (source " + std::to_string(source) +
+           "; a KTX2/Basis texture needs KHR_texture_basisu, which glaze does not read)");
+    if (const auto it = texture_of_gltf_texture_.find(index); it != texture_of_gltf_texture_.end()) return it->second;
     const auto decoded = decoded_.find(source);
     if (decoded == decoded_.end()) {
       const std::string& uri = model_.images[source].uri;
@@ -162,6 +296,17 @@ class GltfLoader {
     }
     Texture texture{model_.images[source].uri.empty() ? "image " + std::to_string(source) : model_.images[source].uri,
                     decoded->second};
+    if (const int sampler = model_.textures[index].sampler; sampler >= 0) {
+      if (sampler >= static_cast<int>(model_.samplers.size()))
+        fail(what + ": texture " + std::to_string(index) + " refers to sampler " + std::to_string(sampler) +
+             ", which does not exist");
+      const tinygltf::Sampler& s = model_.samplers[sampler];
+      texture.wrap_u = wrap_mode(s.wrapS);
+      texture.wrap_v = wrap_mode(s.wrapT);
+      // Magnification decides what a close-up shows; minification (mipmaps) is left to the
+      // many samples each pixel averages.
+      texture.nearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+    }
     size_t clamped = 0;
     for (float& v : texture.image.pixels) {
       if (!(v >= 0.0f && v <= 1.0f)) {
@@ -173,7 +318,7 @@ class GltfLoader {
       warn(path_ + ": texture " + texture.source + ": " + std::to_string(clamped) +
            " values outside [0, 1] clamped (Rd is a reflectance)");
     scene_.textures.push_back(std::move(texture));
-    return texture_of_image_[source] = static_cast<int>(scene_.textures.size()) - 1;
+    return texture_of_gltf_texture_[index] = static_cast<int>(scene_.textures.size()) - 1;
   }
 
   Eigen::Affine3f local_transform(const tinygltf::Node& node, const std::string& what) const {
@@ -226,7 +371,7 @@ class GltfLoader {
                        : !camera.name.empty() ? camera.name
                                               : "camera_" + std::to_string(index);
     for (const CameraSpec& existing : scene_.cameras)
-      if (existing.name == name) name += "_" + std::to_string(scene_.cameras.size());
+      if (existing.name == name) name.append("_").append(std::to_string(scene_.cameras.size()));
     spec.name = name;
     spec.camera_to_world = camera_pose(world, what);
     if (camera.type == "perspective") {
@@ -293,29 +438,46 @@ class GltfLoader {
     return index;
   }
 
-  // Reads accessor `index` as `components` floats per element (normalised integers are
-  // converted), checking every bound on the way.
-  std::vector<float> read_floats(int index, int components, const std::string& what) const {
+  // Reads accessor `index` as `components` floats per element, checking every bound on the
+  // way. Integer components are converted as glTF says: normalised ones to [0, 1] or
+  // [-1, 1], the others (KHR_mesh_quantization) to their value. With `allowed_components`
+  // given, the accessor may have any of those counts (COLOR_0: 3 or 4); `components` is
+  // then set to the count found.
+  std::vector<float> read_floats(int index, int& components, const std::string& what,
+                                 std::initializer_list<int> allowed_components) const {
     const tinygltf::Accessor& accessor = accessor_at(index, what);
-    if (tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type)) != components)
-      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (expected " +
-           std::to_string(components) + " components)");
+    const int found = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
+    const bool allowed = allowed_components.size() ? std::find(allowed_components.begin(), allowed_components.end(),
+                                                               found) != allowed_components.end()
+                                                   : found == components;
+    if (!allowed)
+      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (" + std::to_string(found) +
+           " components; expected " + std::to_string(components) + ")");
+    components = found;
     std::vector<float> values(accessor.count * components);
+    const bool normalized = accessor.normalized;
     for_each_component(accessor, what, [&](size_t element, int component, const unsigned char* p) {
       float v = 0.0f;
+      const auto integer = [&](auto raw, float largest) {
+        std::memcpy(&raw, p, sizeof(raw));
+        return normalized ? std::max(float(raw) / largest, -1.0f) : float(raw);
+      };
       switch (accessor.componentType) {
         case TINYGLTF_COMPONENT_TYPE_FLOAT:
           std::memcpy(&v, p, 4);
           break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE:
+          v = integer(int8_t(), 127.0f);
+          break;
         case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-          v = *p / 255.0f;
+          v = integer(uint8_t(), 255.0f);
           break;
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-          uint16_t s;
-          std::memcpy(&s, p, 2);
-          v = s / 65535.0f;
+        case TINYGLTF_COMPONENT_TYPE_SHORT:
+          v = integer(int16_t(), 32767.0f);
           break;
-        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+          v = integer(uint16_t(), 65535.0f);
+          break;
         default:
           fail(what + ": accessor " + std::to_string(index) + " has an unsupported component type");
       }
@@ -323,6 +485,9 @@ class GltfLoader {
       values[element * components + component] = v;
     });
     return values;
+  }
+  std::vector<float> read_floats(int index, int components, const std::string& what) const {
+    return read_floats(index, components, what, {});
   }
 
   std::vector<uint32_t> read_indices(int index, const std::string& what) const {
@@ -363,6 +528,10 @@ class GltfLoader {
     if (accessor.bufferView < 0 || accessor.bufferView >= static_cast<int>(model_.bufferViews.size()))
       fail(what + ": accessor refers to bufferView " + std::to_string(accessor.bufferView) + ", which does not exist");
     const tinygltf::BufferView& view = model_.bufferViews[accessor.bufferView];
+    if (view.extensions.count("EXT_meshopt_compression") || view.extensions.count("KHR_meshopt_compression"))
+      fail(what +
+           ": its data is compressed with EXT_meshopt_compression, which glaze cannot decode "
+           "(decompress the file first, e.g. `gltf-transform copy IN OUT`)");
     if (view.buffer < 0 || view.buffer >= static_cast<int>(model_.buffers.size()))
       fail(what + ": bufferView " + std::to_string(accessor.bufferView) + " refers to buffer " +
            std::to_string(view.buffer) + ", which does not exist");
@@ -383,6 +552,95 @@ class GltfLoader {
       for (int c = 0; c < components; ++c) visit(e, c, base + e * size_t(stride) + size_t(c) * component_size);
   }
 
+  // A primitive's vertex attributes and indices, read from its accessors or decoded from
+  // its KHR_draco_mesh_compression buffer, whichever the file gives.
+  class PrimitiveSource {
+   public:
+    PrimitiveSource(const GltfLoader& loader, const tinygltf::Primitive& primitive, const std::string& what)
+        : loader_(loader), primitive_(primitive), what_(what) {
+      const auto draco = primitive.extensions.find("KHR_draco_mesh_compression");
+      if (draco != primitive.extensions.end()) decode_draco(draco->second);
+    }
+
+    bool has(const std::string& attribute) const {
+      return draco_ ? draco_attributes_.count(attribute) > 0 : primitive_.attributes.count(attribute) > 0;
+    }
+
+    // `components` as read_floats; the attribute must exist (has()).
+    std::vector<float> floats(const std::string& attribute, int& components,
+                              std::initializer_list<int> allowed_components) const {
+      if (!draco_)
+        return loader_.read_floats(primitive_.attributes.at(attribute), components, what_ + " " + attribute,
+                                   allowed_components);
+      const draco::PointAttribute* source = draco_->GetAttributeByUniqueId(draco_attributes_.at(attribute));
+      if (!source) loader_.fail(what_ + ": the Draco data has no attribute for " + attribute);
+      const int found = source->num_components();
+      const bool allowed = allowed_components.size() ? std::find(allowed_components.begin(), allowed_components.end(),
+                                                                 found) != allowed_components.end()
+                                                     : found == components;
+      if (!allowed)
+        loader_.fail(what_ + ": Draco attribute " + attribute + " has " + std::to_string(found) + " components");
+      components = found;
+      std::vector<float> values(size_t(draco_->num_points()) * components);
+      for (draco::PointIndex point(0); point < draco_->num_points(); ++point)
+        if (!source->ConvertValue<float>(source->mapped_index(point), components,
+                                         values.data() + size_t(point.value()) * components))
+          loader_.fail(what_ + ": Draco attribute " + attribute + " cannot be read as numbers");
+      for (float v : values)
+        if (!std::isfinite(v)) loader_.fail(what_ + ": Draco attribute " + attribute + " contains a non-finite value");
+      return values;
+    }
+    std::vector<float> floats(const std::string& attribute, int components) const {
+      return floats(attribute, components, {});
+    }
+
+    // The triangle list's vertex indices; `vertex_count` when the primitive has none.
+    std::vector<uint32_t> indices(size_t vertex_count) const {
+      std::vector<uint32_t> indices;
+      if (draco_) {
+        for (draco::FaceIndex f(0); f < draco_->num_faces(); ++f)
+          for (int k = 0; k < 3; ++k) indices.push_back(draco_->face(f)[k].value());
+      } else if (primitive_.indices >= 0) {
+        indices = loader_.read_indices(primitive_.indices, what_ + " indices");
+      } else {
+        for (uint32_t v = 0; v < vertex_count; ++v) indices.push_back(v);
+      }
+      return indices;
+    }
+
+   private:
+    void decode_draco(const Value& extension) {
+      const Value* view_value = member(extension, "bufferView");
+      const Value* attributes = member(extension, "attributes");
+      if (!view_value || !attributes || !attributes->IsObject())
+        loader_.fail(what_ + ": KHR_draco_mesh_compression needs bufferView and attributes");
+      const double view_index = loader_.number(*view_value, what_ + " KHR_draco_mesh_compression.bufferView");
+      if (view_index < 0 || view_index >= double(loader_.model_.bufferViews.size()))
+        loader_.fail(what_ + ": KHR_draco_mesh_compression.bufferView does not exist");
+      const tinygltf::BufferView& view = loader_.model_.bufferViews[size_t(view_index)];
+      if (view.buffer < 0 || view.buffer >= static_cast<int>(loader_.model_.buffers.size()) ||
+          view.byteOffset + view.byteLength > loader_.model_.buffers[view.buffer].data.size())
+        loader_.fail(what_ + ": KHR_draco_mesh_compression's bufferView lies outside its buffer");
+      draco::DecoderBuffer buffer;
+      buffer.Init(reinterpret_cast<const char*>(loader_.model_.buffers[view.buffer].data.data() + view.byteOffset),
+                  view.byteLength);
+      draco::Decoder decoder;
+      auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+      if (!decoded.ok())
+        loader_.fail(what_ + ": its KHR_draco_mesh_compression data cannot be decoded (" +
+                     decoded.status().error_msg_string() + ")");
+      draco_ = std::move(decoded).value();
+      for (const std::string& key : attributes->Keys())
+        draco_attributes_[key] = int(loader_.number(attributes->Get(key), what_ + " Draco attribute " + key));
+    }
+
+    const GltfLoader& loader_;
+    const tinygltf::Primitive& primitive_;
+    std::string what_;
+    std::unique_ptr<draco::Mesh> draco_;
+    std::map<std::string, int> draco_attributes_;
+  };
+
   void add_mesh(int index, const Eigen::Affine3f& world, const std::string& node_what) {
     if (index >= static_cast<int>(model_.meshes.size()))
       fail(node_what + ": mesh " + std::to_string(index) + " does not exist");
@@ -394,24 +652,19 @@ class GltfLoader {
       const std::string what = "mesh " + std::to_string(index) + (mesh.name.empty() ? "" : " '" + mesh.name + "'") +
                                " primitive " + std::to_string(p);
       if (primitive.mode != TINYGLTF_MODE_TRIANGLES) {
-        warn(path_ + ": " + what + " is not a triangle list (mode " + std::to_string(primitive.mode) + "); skipped");
+        ++ignored_["point, line and strip primitives"];
         continue;
       }
-      const auto position = primitive.attributes.find("POSITION");
-      if (position == primitive.attributes.end()) fail(what + " has no POSITION attribute");
+      const PrimitiveSource source(*this, primitive, what);
+      if (!source.has("POSITION")) fail(what + " has no POSITION attribute");
       TriangleMesh out;
       out.name = what;
       out.material = material_index(primitive.material, what);
-      const std::vector<float> positions = read_floats(position->second, 3, what + " POSITION");
+      const std::vector<float> positions = source.floats("POSITION", 3);
       const size_t vertex_count = positions.size() / 3;
       for (size_t v = 0; v < vertex_count; ++v)
         out.positions.push_back(world * Vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]));
-      std::vector<uint32_t> indices;
-      if (primitive.indices >= 0) {
-        indices = read_indices(primitive.indices, what + " indices");
-      } else {
-        for (uint32_t v = 0; v < vertex_count; ++v) indices.push_back(v);
-      }
+      const std::vector<uint32_t> indices = source.indices(vertex_count);
       if (indices.size() % 3 != 0)
         fail(what + ": index count " + std::to_string(indices.size()) + " is not a multiple of 3");
       // A transform with negative determinant mirrors the mesh, which reverses the
@@ -427,37 +680,36 @@ class GltfLoader {
         else
           out.triangles.push_back({indices[t], indices[t + 1], indices[t + 2]});
       }
-      if (const auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
-        const std::vector<float> normals = read_floats(normal->second, 3, what + " NORMAL");
+      // Without NORMAL the mesh stays flat (glTF 2.0 §3.7.2.1): the ray tracer shades each
+      // face with its own normal.
+      if (source.has("NORMAL")) {
+        const std::vector<float> normals = source.floats("NORMAL", 3);
         if (normals.size() != positions.size()) fail(what + ": NORMAL and POSITION counts differ");
         for (size_t v = 0; v < vertex_count; ++v) {
           const Vec3 n = normal_matrix * Vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
           out.normals.push_back(n.norm() > 0.0f ? n.normalized() : Vec3(0, 1, 0));
         }
-      } else {
-        generate_smooth_normals(out);
       }
-      if (const auto uv = primitive.attributes.find("TEXCOORD_0"); uv != primitive.attributes.end()) {
-        const std::vector<float> uvs = read_floats(uv->second, 2, what + " TEXCOORD_0");
-        if (uvs.size() / 2 != vertex_count) fail(what + ": TEXCOORD_0 and POSITION counts differ");
+      const SceneMaterial& material = scene_.materials[out.material];
+      if (material.texture >= 0) {
+        const std::string set = "TEXCOORD_" + std::to_string(material.texcoord);
+        if (!source.has(set))
+          fail(what + ": its material's texture reads " + set + ", which the primitive does not have");
+        const std::vector<float> uvs = source.floats(set, 2);
+        if (uvs.size() / 2 != vertex_count) fail(what + ": " + set + " and POSITION counts differ");
         for (size_t v = 0; v < vertex_count; ++v) out.uvs.push_back(Vec2(uvs[2 * v], uvs[2 * v + 1]));
       }
-      if (scene_.materials[out.material].texture >= 0 && out.uvs.empty())
-        fail(what + ": its material has a texture but the primitive has no TEXCOORD_0");
+      if (source.has("COLOR_0")) {
+        int components = 3;
+        const std::vector<float> colors = source.floats("COLOR_0", components, {3, 4});
+        if (colors.size() / components != vertex_count) fail(what + ": COLOR_0 and POSITION counts differ");
+        for (size_t v = 0; v < vertex_count; ++v) {  // alpha (coverage) is not modelled
+          const float* c = &colors[v * components];
+          out.colors.push_back(RGB(c[0], c[1], c[2]).max(0.0f).min(1.0f));
+        }
+      }
       if (!out.triangles.empty()) scene_.meshes.push_back(std::move(out));
     }
-  }
-
-  // Area-weighted average of the faces around each vertex (glTF says flat shading when
-  // normals are absent; smooth normals are what a polished surface is meant to have).
-  static void generate_smooth_normals(TriangleMesh& mesh) {
-    mesh.normals.assign(mesh.positions.size(), Vec3::Zero());
-    for (const auto& t : mesh.triangles) {
-      const Vec3 face =
-          (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
-      for (uint32_t v : t) mesh.normals[v] += face;  // |face| = twice the area
-    }
-    for (Vec3& n : mesh.normals) n = n.norm() > 0.0f ? n.normalized() : Vec3(0, 1, 0);
   }
 
   void read_scene_extras(const Value& extras) {
@@ -507,7 +759,8 @@ class GltfLoader {
   tinygltf::Model model_;
   Scene scene_;
   std::map<int, Image> decoded_;
-  std::map<int, int> texture_of_image_;
+  std::map<int, int> texture_of_gltf_texture_;  // a texture is an image and a sampler
+  std::map<std::string, int> ignored_;          // feature -> count, for the one warning
   std::set<int> on_path_;
   int default_material_ = -1;
 };

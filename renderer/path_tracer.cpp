@@ -59,7 +59,7 @@ RGB PathTracer::trace_path(const Ray& camera_ray, Pcg32& rng) const {
 
     const Frame frame = Frame::from_normal(hit->normal);
     const Vec3 wo = frame.to_local(-ray.direction);
-    const PolishedMaterial material = scene_.material_at(hit->material, hit->uv);
+    const PolishedMaterial material = scene_.material_at(hit->material, hit->uv, hit->color);
     const Vec3 origin = hit->position + RayTracer::ray_offset(hit->position) * hit->geometric_normal;
 
     if (use_environment_samples) {

@@ -158,11 +158,16 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
     const float w = 1.0f - u - v;
     hit.position = ray.origin + hit.distance * ray.direction;
     hit.geometric_normal = geometric_normal.normalized();
-    const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
-    hit.normal = shading.norm() > 0.0f ? shading.normalized() : hit.geometric_normal;
+    hit.normal = hit.geometric_normal;  // flat, where the mesh has no normals
+    if (!mesh.normals.empty()) {
+      const Vec3 shading = w * mesh.normals[t[0]] + u * mesh.normals[t[1]] + v * mesh.normals[t[2]];
+      if (shading.norm() > 0.0f) hit.normal = shading.normalized();
+      if (hit.geometric_normal.dot(hit.normal) < 0.0f) hit.geometric_normal = -hit.geometric_normal;
+    }
     hit.uv = mesh.uvs.empty() || !texture_coordinates
                  ? Vec2::Zero()
                  : Vec2(w * mesh.uvs[t[0]] + u * mesh.uvs[t[1]] + v * mesh.uvs[t[2]]);
+    if (!mesh.colors.empty()) hit.color = w * mesh.colors[t[0]] + u * mesh.colors[t[1]] + v * mesh.colors[t[2]];
     hit.material = mesh.material;
   }
   if (hit.geometric_normal.dot(ray.direction) > 0.0f) {  // two-sided: face the viewer
@@ -178,7 +183,7 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool tex
     for (int k = 0; k < kLanes; ++k) {
       if (k >= count) {
         out.hit[k] = out.hit[count - 1], out.normal.set(k, out.normal[count - 1]);
-        out.material[k] = out.material[count - 1], out.uv[k] = out.uv[count - 1];
+        out.material[k] = out.material[count - 1], out.uv[k] = out.uv[count - 1], out.color[k] = out.color[count - 1];
         continue;
       }
       const std::optional<SurfaceHit> hit =
@@ -187,6 +192,7 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool tex
       out.normal.set(k, hit ? hit->normal : Vec3::UnitZ());
       out.material[k] = hit ? hit->material : 0;
       out.uv[k] = hit ? hit->uv : Vec2::Zero();
+      out.color[k] = hit ? hit->color : RGB::Ones();
     }
     return;
   }
@@ -217,6 +223,7 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool tex
     out.normal.y[k] = py * scale;
     out.normal.z[k] = pz * scale;
     out.material[k] = sphere.material;
+    out.color[k] = RGB::Ones();
   }
   for (int k = 0; k < kLanes; ++k)  // of the outward normal, whichever way it was turned
     out.uv[k] = texture_coordinates ? direction_to_latlong(sphere.rotation.transpose() * (facing[k] * out.normal[k]))

@@ -5,7 +5,9 @@
 // coordinates. Analytic spheres are Embree user geometry intersected in double
 // precision, with exact normals (p - c) / r and hit points projected onto the surface:
 // the inverse fits depend on exact normals. Surfaces are two-sided: the normals of a
-// hit are turned to face the incoming ray.
+// hit are turned to face the incoming ray, after the geometric normal is turned to the
+// side of the shading normal: glTF's winding says nothing about which side is the outside
+// when the file gives normals, and a mesh wound against its normals must not go black.
 #pragma once
 
 #include "renderer/camera.h"
@@ -23,9 +25,10 @@ namespace glaze {
 struct SurfaceHit {
   float distance;  // along the (unit) ray direction
   Vec3 position;
-  Vec3 normal;            // shading normal, unit, facing the ray's origin side
-  Vec3 geometric_normal;  // unit, facing the ray's origin side
-  Vec2 uv;                // texture coordinate (0, 0 if the mesh has none)
+  Vec3 normal;              // shading normal, unit, facing the ray's origin side
+  Vec3 geometric_normal;    // unit, facing the ray's origin side
+  Vec2 uv;                  // texture coordinate (0, 0 if the mesh has none)
+  RGB color = RGB::Ones();  // vertex colour (COLOR_0), white where the mesh has none
   int material;
 };
 
@@ -36,7 +39,8 @@ struct SurfaceHits {
   Directions normal;            // shading normal, unit, facing the ray's origin side
   alignas(64) int hit[kLanes];  // 1 where the ray hit (an int, to vectorise with floats)
   int material[kLanes];
-  Vec2 uv[kLanes];  // texture coordinate, if asked for (else 0, 0)
+  Vec2 uv[kLanes];    // texture coordinate, if asked for (else 0, 0)
+  RGB color[kLanes];  // vertex colour, white where there is none
 };
 
 class RayTracer {

@@ -48,10 +48,11 @@ PinholeCamera Scene::make_camera(const CameraSpec& spec, std::optional<std::pair
   return PinholeCamera::from_vertical_fov(spec.name, spec.camera_to_world, spec.yfov, size.first, size.second);
 }
 
-PolishedMaterial Scene::material_at(int material, const Vec2& uv) const {
+PolishedMaterial Scene::material_at(int material, const Vec2& uv, const RGB& color) const {
   const SceneMaterial& m = materials[material];
-  if (m.texture < 0) return PolishedMaterial(m.R0, m.Rd);
-  return PolishedMaterial(m.R0, (m.Rd * textures[m.texture].lookup(uv)).min(1.0f).max(0.0f));
+  RGB Rd = m.Rd * color;
+  if (m.texture >= 0) Rd *= textures[m.texture].lookup(m.uv_transform * uv.homogeneous());
+  return PolishedMaterial(m.R0, Rd.min(1.0f).max(0.0f));
 }
 
 }  // namespace glaze

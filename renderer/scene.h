@@ -16,18 +16,25 @@
 
 namespace glaze {
 
+// KHR_texture_transform's affine map of texture coordinates, uv' = T R S uv: the first two
+// columns are R S, the third is T.
+using UvTransform = Eigen::Matrix<float, 2, 3>;
+
 struct SceneMaterial {
   std::string name;
   float R0 = 0.04f;
-  RGB Rd = RGB::Ones();  // factor; times the texture where there is one
+  RGB Rd = RGB::Ones();  // factor; times the texture and the vertex colour where there are
   int texture = -1;      // index into Scene::textures, or -1
+  int texcoord = 0;      // the TEXCOORD_n set the texture reads
+  UvTransform uv_transform = UvTransform::Identity();
 };
 
 struct TriangleMesh {
   std::string name;
   std::vector<Vec3> positions;  // world space
-  std::vector<Vec3> normals;    // world space, unit, per vertex (generated when absent)
-  std::vector<Vec2> uvs;        // per vertex, or empty
+  std::vector<Vec3> normals;    // world space, unit, per vertex; empty: flat (the face's normal)
+  std::vector<Vec2> uvs;        // per vertex, the set the material's texture reads, or empty
+  std::vector<RGB> colors;      // per vertex (COLOR_0), multiplying the base colour, or empty
   std::vector<std::array<uint32_t, 3>> triangles;
   int material = 0;
 };
@@ -82,7 +89,8 @@ struct Scene {
   PinholeCamera make_camera(const CameraSpec& spec, std::optional<std::pair<int, int>> resolution) const;
 
   // The material at a surface point with texture coordinate uv.
-  PolishedMaterial material_at(int material, const Vec2& uv) const;
+  // `color` is the interpolated vertex colour (COLOR_0), white where there is none.
+  PolishedMaterial material_at(int material, const Vec2& uv, const RGB& color = RGB::Ones()) const;
 
   // One analytic sphere and nothing else: nothing can shadow or reflect the object onto
   // itself, so one bounce and no occlusion rays are exact (docs/design.md §6).

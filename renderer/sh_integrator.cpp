@@ -38,8 +38,11 @@ class SampleShader {
         options_(options),
         diffuse_sum_(environment.sh(options.lmax)),  // projected once per environment and lmax
         textured_(std::any_of(scene.materials.begin(), scene.materials.end(),
-                              [](const SceneMaterial& m) { return m.texture >= 0; })) {
-    // Without textures every material is a constant: made (and validated) once, not per ray.
+                              [](const SceneMaterial& m) { return m.texture >= 0; }) ||
+                  std::any_of(scene.meshes.begin(), scene.meshes.end(),
+                              [](const TriangleMesh& m) { return !m.colors.empty(); })) {
+    // Without textures and vertex colours every material is a constant: made (and
+    // validated) once, not per ray.
     if (textured_) return;
     for (size_t m = 0; m < scene.materials.size(); ++m) untextured_.push_back(scene.material_at(int(m), Vec2::Zero()));
   }
@@ -84,8 +87,9 @@ class SampleShader {
   RGB radiance(const Ray& ray, const SurfaceHits& hits, int lane, float mu, const EnvironmentLookup& mirror) const {
     if (!hits.hit[lane]) return options_.black_background ? RGB::Zero() : environment_.eval(ray.direction);
     if (!(mu > 0.0f)) return RGB::Zero();  // the shading normal faces away: nothing reflected
-    const PolishedMaterial material =
-        textured_ ? scene_.material_at(hits.material[lane], hits.uv[lane]) : untextured_[size_t(hits.material[lane])];
+    const PolishedMaterial material = textured_
+                                          ? scene_.material_at(hits.material[lane], hits.uv[lane], hits.color[lane])
+                                          : untextured_[size_t(hits.material[lane])];
     // Clamped at zero: a negative truncated sum is SH ringing (a point-like light seen
     // from its far side), not light. The inverse fits keep it unclamped, where the model
     // must stay linear in the lighting coefficients.

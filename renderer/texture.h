@@ -1,10 +1,12 @@
-// texture.h: an RGB image mapped over a surface by texture coordinates: bilinear
-// (image_lookup.h), repeating outside [0, 1) as glTF's default sampler. Texel (0, 0) is
-// at the top-left of the image with uv = (0, 0) (glTF's convention: v grows downwards in
-// the image).
+// texture.h: an RGB image mapped over a surface by texture coordinates, read as a glTF
+// sampler says: bilinear (image_lookup.h) or nearest, each axis repeating, clamped or
+// mirrored outside [0, 1) (repeating by default). Texel (0, 0) is at the top-left of the
+// image with uv = (0, 0) (glTF's convention: v grows downwards in the image). There are no
+// mipmaps: a renderer that averages many samples per pixel filters minification itself.
 #pragma once
 
 #include "renderer/image.h"
+#include "renderer/image_lookup.h"
 
 #include <string>
 
@@ -13,7 +15,10 @@ namespace glaze {
 struct Texture {
   std::string source;  // file or description, for messages
   Image image;         // linear RGB
+  Wrap wrap_u = Wrap::repeat, wrap_v = Wrap::repeat;
+  bool nearest = false;  // the nearest texel instead of the bilinear blend
 
+  // Non-finite coordinates read texel (0, 0) instead of indexing out of the image.
   RGB lookup(const Vec2& uv) const;
 };
 

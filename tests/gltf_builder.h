@@ -47,9 +47,9 @@ inline std::string base64(const std::vector<unsigned char>& bytes) {
 // Collects vertex data into one buffer and describes it with bufferViews and accessors.
 class GltfBuffer {
  public:
-  // VEC3 / VEC2 float accessor over `values`; returns its index.
+  // VEC4 / VEC3 / VEC2 / SCALAR float accessor over `values`; returns its index.
   int floats(const std::vector<float>& values, int components) {
-    const char* type = components == 3 ? "VEC3" : components == 2 ? "VEC2" : "SCALAR";
+    const char* type = components == 4 ? "VEC4" : components == 3 ? "VEC3" : components == 2 ? "VEC2" : "SCALAR";
     return add(values.data(), values.size() * sizeof(float), 5126, type, values.size() / components);
   }
   // SCALAR unsigned-short index accessor; returns its index.
@@ -64,16 +64,25 @@ class GltfBuffer {
     gltf["accessors"] = accessors_;
   }
   const std::vector<unsigned char>& bytes() const { return bytes_; }
-
- private:
-  int add(const void* data, size_t size, int component_type, const char* type, size_t count) {
+  // A bufferView over `size` raw bytes (compressed data, for instance); returns its index.
+  int view(const void* data, size_t size) {
     while (bytes_.size() % 4) bytes_.push_back(0);
     const size_t offset = bytes_.size();
     bytes_.resize(offset + size);
     std::memcpy(bytes_.data() + offset, data, size);
     views_.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", size}});
+    return static_cast<int>(views_.size()) - 1;
+  }
+  // Any accessor description (an accessor of Draco-compressed data has no bufferView).
+  int accessor(const json& description) {
+    accessors_.push_back(description);
+    return static_cast<int>(accessors_.size()) - 1;
+  }
+
+ private:
+  int add(const void* data, size_t size, int component_type, const char* type, size_t count) {
     accessors_.push_back(
-        {{"bufferView", views_.size() - 1}, {"componentType", component_type}, {"count", count}, {"type", type}});
+        {{"bufferView", view(data, size)}, {"componentType", component_type}, {"count", count}, {"type", type}});
     return static_cast<int>(accessors_.size()) - 1;
   }
   std::vector<unsigned char> bytes_;
