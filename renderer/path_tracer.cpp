@@ -2,6 +2,9 @@
 
 #include "renderer/error.h"
 
+#include <array>
+#include <span>
+
 namespace glaze {
 DirectLightEstimator parse_direct_light_estimator(const std::string& name) {
   if (name == "mis") return DirectLightEstimator::mis;
@@ -31,67 +34,119 @@ void PathTracer::radiance(const Ray* rays, int count, Pcg32& rng, RGB* out) cons
   if (convex_) {
     convex_direct_light(rays, count, rng, out);
   } else {
-    for (int k = 0; k < count; ++k) out[k] = trace_path(rays[k], rng);
+    for (int first = 0; first < count; first += kLanes)
+      trace_paths(rays + first, std::min(kLanes, count - first), rng, out + first);
   }
 }
 
-RGB PathTracer::trace_path(const Ray& camera_ray, Pcg32& rng) const {
-  RGB result = RGB::Zero(), throughput = RGB::Ones();
-  Ray ray = camera_ray;
-  bool after_delta = true;     // the last bounce was the mirror (or there was none)
-  float last_bsdf_pdf = 0.0f;  // solid-angle density of the last diffuse-lobe sample
+void PathTracer::trace_paths(const Ray* rays, int count, Pcg32& rng, RGB* out) const {
+  // Each lane's path state; `active` lists the lanes whose paths go on, in lane order, so
+  // that the random numbers are drawn in an order fixed by the pixel alone.
+  struct Path {
+    Ray ray;
+    RGB throughput = RGB::Ones();
+    bool after_delta = true;     // the last bounce was the mirror (or there was none)
+    float last_bsdf_pdf = 0.0f;  // solid-angle density of the last diffuse-lobe sample
+  };
+  std::array<Path, kLanes> paths;
+  std::array<int, kLanes> active;
+  std::array<SurfaceHit, kLanes> hits;
+  std::array<bool, kLanes> hit;
+  std::array<EnvironmentLookup, kLanes> at;
+  std::array<EnvironmentSample, kLanes> lights;
+  for (int k = 0; k < count; ++k) {
+    paths[k].ray = rays[k];
+    out[k] = RGB::Zero();
+    active[k] = k;
+  }
+  int live = count;
   const bool use_environment_samples = options_.estimator != DirectLightEstimator::bsdf;
 
-  for (int bounce = 0;; ++bounce) {
-    const std::optional<SurfaceHit> hit = tracer_.intersect(ray);
-    if (!hit) {
-      if (bounce == 0) {
-        if (!options_.black_background) result += environment_.eval(ray.direction);
-      } else {
-        const EnvironmentLookup at = environment_.locate(ray.direction);
-        const bool need_pdf = !after_delta && options_.estimator == DirectLightEstimator::mis;
-        const float weight = escape_weight(after_delta, last_bsdf_pdf, need_pdf ? environment_.pdf(at) : 0.0f);
-        if (weight > 0.0f) result += throughput * environment_.eval(at) * weight;
-      }
-      break;
+  for (int bounce = 0; live > 0; ++bounce) {
+    for (int i = 0; i < live; ++i) {
+      const std::optional<SurfaceHit> found = tracer_.intersect(paths[active[i]].ray);
+      hit[i] = found.has_value();
+      if (found) hits[i] = *found;
     }
-    if (bounce >= max_depth_) break;
 
-    const Frame frame = Frame::from_normal(hit->normal);
-    const Vec3 wo = frame.to_local(-ray.direction);
-    const PolishedMaterial material = scene_.material_at(hit->material, hit->uv, hit->color);
-    const Vec3 origin = hit->position + RayTracer::ray_offset(hit->position) * hit->geometric_normal;
+    // Paths that escaped: every lane's texels (and sampling density) are requested
+    // before the first is read.
+    const bool need_pdf = bounce > 0 && options_.estimator == DirectLightEstimator::mis;
+    for (int i = 0; i < live; ++i) {
+      if (hit[i] || (bounce == 0 && options_.black_background)) continue;
+      at[i] = environment_.locate(paths[active[i]].ray.direction);
+      environment_.prefetch(at[i], need_pdf && !paths[active[i]].after_delta);
+    }
+    int next = 0;
+    for (int i = 0; i < live; ++i) {
+      const int k = active[i];
+      const Path& path = paths[k];
+      if (hit[i]) {
+        if (bounce < max_depth_) hits[next] = hits[i], active[next++] = k;
+        continue;
+      }
+      if (bounce == 0) {
+        if (!options_.black_background) out[k] += environment_.eval(at[i]);
+      } else {
+        const bool pdf_needed = need_pdf && !path.after_delta;
+        const float weight =
+            escape_weight(path.after_delta, path.last_bsdf_pdf, pdf_needed ? environment_.pdf(at[i]) : 0.0f);
+        if (weight > 0.0f) out[k] += path.throughput * environment_.eval(at[i]) * weight;
+      }
+    }
+    live = next;
 
+    // Next-event estimation: all lanes' light samples at once (their table reads
+    // overlap), and the texels of their radiance requested before the shadow rays.
     if (use_environment_samples) {
-      const EnvironmentSample light = environment_.sample(rng);
-      if (light.pdf > 0.0f && light.direction.dot(hit->geometric_normal) > 0.0f) {
+      environment_.sample(rng, std::span(lights.data(), size_t(live)));
+      for (int i = 0; i < live; ++i) {
+        if (!(lights[i].pdf > 0.0f)) continue;
+        at[i] = environment_.locate(lights[i].direction);
+        environment_.prefetch(at[i], false);
+      }
+    }
+
+    next = 0;
+    for (int i = 0; i < live; ++i) {
+      const int k = active[i];
+      Path& path = paths[k];
+      const SurfaceHit& h = hits[i];
+      const Frame frame = Frame::from_normal(h.normal);
+      const Vec3 wo = frame.to_local(-path.ray.direction);
+      const PolishedMaterial material = scene_.material_at(h.material, h.uv, h.color);
+      const Vec3 origin = h.position + RayTracer::ray_offset(h.position) * h.geometric_normal;
+
+      const EnvironmentSample& light = lights[i];
+      if (use_environment_samples && light.pdf > 0.0f && light.direction.dot(h.geometric_normal) > 0.0f) {
         const Vec3 wi = frame.to_local(light.direction);
         const RGB f = material.eval_diffuse(wo, wi);
         if ((f > 0.0f).any() && !tracer_.occluded({origin, light.direction})) {
           const float weight = light_sample_weight(light.pdf, material.pdf_diffuse(wo, wi));
-          result += throughput * f * (wi.z() * weight / light.pdf) * environment_.eval(light.direction);
+          out[k] += path.throughput * f * (wi.z() * weight / light.pdf) * environment_.eval(at[i]);
         }
       }
-    }
 
-    const float u_lobe = rng.next_float();
-    const Vec2 u(rng.next_float(), rng.next_float());
-    const std::optional<MaterialSample> sample = material.sample(wo, u_lobe, u);
-    if (!sample) break;
-    const Vec3 direction = frame.to_world(sample->wi);
-    if (direction.dot(hit->geometric_normal) <= 0.0f) break;  // shading normal sent it inside
-    throughput *= sample->weight;
-    after_delta = sample->is_specular;
-    last_bsdf_pdf = sample->pdf;
-    ray = {origin, direction.normalized()};
+      const float u_lobe = rng.next_float();
+      const Vec2 u(rng.next_float(), rng.next_float());
+      const std::optional<MaterialSample> sample = material.sample(wo, u_lobe, u);
+      if (!sample) continue;
+      const Vec3 direction = frame.to_world(sample->wi);
+      if (direction.dot(h.geometric_normal) <= 0.0f) continue;  // shading normal sent it inside
+      path.throughput *= sample->weight;
+      path.after_delta = sample->is_specular;
+      path.last_bsdf_pdf = sample->pdf;
+      path.ray = {origin, direction.normalized()};
 
-    if (bounce + 1 >= options_.russian_roulette_depth) {
-      const float survive = std::min(0.95f, throughput.maxCoeff());
-      if (!(rng.next_float() < survive)) break;
-      throughput /= survive;
+      if (bounce + 1 >= options_.russian_roulette_depth) {
+        const float survive = std::min(0.95f, path.throughput.maxCoeff());
+        if (!(rng.next_float() < survive)) continue;
+        path.throughput /= survive;
+      }
+      active[next++] = k;
     }
+    live = next;
   }
-  return result;
 }
 
 }  // namespace glaze

@@ -50,7 +50,10 @@ class PathTracer {
   int max_depth() const { return max_depth_; }
 
  private:
-  RGB trace_path(const Ray& ray, Pcg32& rng) const;
+  // The paths of rays[0..count), count <= kLanes, advanced together bounce by bounce:
+  // the environment's memory reads of all of them (sampling table, texels) are
+  // requested before any is used, so that their latencies overlap.
+  void trace_paths(const Ray* rays, int count, Pcg32& rng, RGB* out) const;
   void convex_direct_light(const Ray* rays, int count, Pcg32& rng, RGB* out) const;
   // MIS weights of the two strategies for the diffuse lobe's direct light.
   float light_sample_weight(float light_pdf, float bsdf_pdf) const {

@@ -1,6 +1,8 @@
 // Benchmarks of the shared core (Google Benchmark). Run: build/tests/glaze_bench
 // Reported in docs/performance.md: SH projection of a 1024x512 map at lmax 4, 10M environment
-// samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline.
+// samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline, the
+// path tracer on meshes (the still life, a 25k-triangle sphere).
+#include "gltf_builder.h"
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"
 #include "inverse/material_fit.h"
@@ -9,8 +11,10 @@
 #include "inverse/texture_fit.h"
 #include "renderer/environment.h"
 #include "renderer/material.h"
+#include "renderer/path_tracer.h"
 #include "renderer/procedural_environment.h"
 #include "renderer/ray_tracer.h"
+#include "renderer/render.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "renderer/sh_integrator.h"
@@ -155,6 +159,79 @@ void BM_ShIntegratorFrame512Refined(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(render_sh(scene, tracer, env, camera, options));
 }
 BENCHMARK(BM_ShIntegratorFrame512Refined)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The issue-41 figures: the path tracer (default options, depth 8) on meshes under the
+// procedural office, on all cores, as samples per second: the still life (a ground,
+// a cube, a mesh sphere and an analytic sphere that shadow each other), and a UV sphere
+// of 25,344 triangles alone. The sphere's glTF is written to the temporary directory,
+// where the Mitsuba comparison (docs/performance.md) takes it from.
+std::string mesh_sphere_scene() {
+  using namespace testing;
+  constexpr int kStacks = 100, kSlices = 128;  // 2 * kSlices * (kStacks - 1) triangles
+  std::vector<float> positions, uvs;
+  std::vector<uint16_t> indices;
+  for (int i = 0; i <= kStacks; ++i) {
+    const double theta = M_PI * i / kStacks;
+    for (int j = 0; j <= kSlices; ++j) {
+      const double phi = 2.0 * M_PI * j / kSlices;
+      for (const double c : {std::sin(theta) * std::sin(phi), std::cos(theta), std::sin(theta) * std::cos(phi)})
+        positions.push_back(float(c));
+      uvs.insert(uvs.end(), {float(j) / kSlices, float(i) / kStacks});
+    }
+  }
+  for (int i = 0; i < kStacks; ++i) {
+    for (int j = 0; j < kSlices; ++j) {
+      const int a = i * (kSlices + 1) + j, b = a + kSlices + 1;  // b below a
+      if (i > 0) indices.insert(indices.end(), {uint16_t(a), uint16_t(b), uint16_t(a + 1)});
+      if (i < kStacks - 1) indices.insert(indices.end(), {uint16_t(a + 1), uint16_t(b), uint16_t(b + 1)});
+    }
+  }
+  GltfBuffer buffer;
+  const int position = buffer.floats(positions, 3), normal = buffer.floats(positions, 3), uv = buffer.floats(uvs, 2);
+  const int index = buffer.indices(indices);
+  json camera_node = {{"camera", 0}, {"translation", {0.0, 0.0, 4.0}}};
+  json gltf = gltf_document({{{"mesh", 0}}, camera_node}, {0, 1});
+  gltf["meshes"] = json::array(
+      {{{"primitives", json::array({{{"attributes", {{"POSITION", position}, {"NORMAL", normal}, {"TEXCOORD_0", uv}}},
+                                     {"indices", index},
+                                     {"material", 0}}})}}});
+  gltf["materials"] =
+      json::array({quiet_material({{"extras", {{"glaze", {{"R0", 0.0452}, {"Rd", {0.9765, 0.0186, 0.0}}}}}}})});
+  gltf["cameras"] =
+      json::array({{{"type", "perspective"},
+                    {"perspective", {{"yfov", 30.0 * M_PI / 180.0}, {"aspectRatio", 1.0}, {"znear", 0.1}}}}});
+  gltf["scenes"][0]["extras"] = {
+      {"glaze", {{"environment", {{"procedural", "office"}}}, {"film", {{"width", 256}, {"height", 256}}}}}};
+  buffer.into(gltf);
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "glaze_bench_mesh_sphere";
+  std::filesystem::create_directories(folder);
+  const std::string path = (folder / "mesh_sphere.gltf").string();
+  std::ofstream(path) << gltf.dump();
+  return path;
+}
+
+void path_trace_benchmark(benchmark::State& state, const std::string& path) {
+  const Scene scene = load_scene(path);
+  const EnvironmentSpec& spec = *scene.environment;
+  const Environment environment = make_environment(spec.source, spec.options, spec.width, spec.height);
+  const RayTracer tracer(scene);
+  const PathTracer path_tracer(scene, tracer, environment, {});
+  const PinholeCamera camera = scene.make_camera(scene.cameras.front(), std::nullopt);
+  RenderOptions options;
+  options.spp = 4;
+  Pcg32 warm_up;
+  environment.sample(warm_up);  // build the alias table outside the timing
+  for (auto _ : state) benchmark::DoNotOptimize(render(path_tracer, camera, options).image.pixels.data());
+  state.SetItemsProcessed(state.iterations() * int64_t(camera.width) * camera.height * options.spp);
+}
+
+void BM_PathTraceStillLife(benchmark::State& state) {
+  path_trace_benchmark(state, std::string(GLAZE_SOURCE_DIR) + "/scenes/still_life_office.gltf");
+}
+BENCHMARK(BM_PathTraceStillLife)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_PathTraceMeshSphere25k(benchmark::State& state) { path_trace_benchmark(state, mesh_sphere_scene()); }
+BENCHMARK(BM_PathTraceMeshSphere25k)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The issue-5 figures: the fit pipeline of `invert-fit` (samples, shading terms, the
 // nested fit; not the re-renders) on sh-rendered 512x512 captures made once by the glaze
