@@ -96,11 +96,14 @@ class GltfLoader {
     std::string unsupported;
     for (const std::string& extension : model_.extensionsRequired)
       if (!kSupportedExtensions.count(extension)) unsupported.append(unsupported.empty() ? "" : ", ").append(extension);
-    if (!unsupported.empty())
-      fail("requires glTF extensions that glaze does not support: " + unsupported +
-           " (glaze reads KHR_materials_ior, KHR_texture_transform, KHR_draco_mesh_compression and "
-           "KHR_mesh_quantization; convert the file without the others, e.g. `gltf-transform copy IN OUT` "
-           "decompresses meshopt and `gltf-transform png IN OUT` re-encodes KTX2/Basis textures)");
+    if (!unsupported.empty()) {
+      std::string supported;
+      for (const std::string& extension : kSupportedExtensions)
+        supported.append(supported.empty() ? "" : ", ").append(extension);
+      fail("requires glTF extensions that glaze does not support: " + unsupported + " (glaze reads " + supported +
+           "; convert the file without the others, e.g. `gltf-transform copy IN OUT` decompresses meshopt and "
+           "`gltf-transform png IN OUT` re-encodes KTX2/Basis textures)");
+    }
     if (!ok) fail("cannot be loaded as glTF 2.0: " + (error.empty() ? std::string("unknown error") : error));
   }
 
@@ -438,22 +441,25 @@ class GltfLoader {
     return index;
   }
 
-  // Reads accessor `index` as `components` floats per element, checking every bound on the
-  // way. Integer components are converted as glTF says: normalised ones to [0, 1] or
-  // [-1, 1], the others (KHR_mesh_quantization) to their value. With `allowed_components`
-  // given, the accessor may have any of those counts (COLOR_0: 3 or 4); `components` is
-  // then set to the count found.
-  std::vector<float> read_floats(int index, int& components, const std::string& what,
-                                 std::initializer_list<int> allowed_components) const {
+  // Fails unless an attribute's `found` components per element are one of `allowed`;
+  // `subject` names it (an accessor, a Draco attribute).
+  void require_components(int found, std::initializer_list<int> allowed, const std::string& subject) const {
+    if (std::find(allowed.begin(), allowed.end(), found) != allowed.end()) return;
+    std::string expected;
+    for (int count : allowed) expected.append(expected.empty() ? "" : " or ").append(std::to_string(count));
+    fail(subject + " has the wrong type (" + std::to_string(found) + " components; expected " + expected + ")");
+  }
+
+  // Reads accessor `index` as floats, `allowed` components per element (COLOR_0: 3 or 4),
+  // checking every bound on the way; `components_found` receives the count. Integer
+  // components are converted as glTF says: normalised ones to [0, 1] or [-1, 1], the
+  // others (KHR_mesh_quantization) to their value.
+  std::vector<float> read_floats(int index, std::initializer_list<int> allowed, const std::string& what,
+                                 int* components_found = nullptr) const {
     const tinygltf::Accessor& accessor = accessor_at(index, what);
-    const int found = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
-    const bool allowed = allowed_components.size() ? std::find(allowed_components.begin(), allowed_components.end(),
-                                                               found) != allowed_components.end()
-                                                   : found == components;
-    if (!allowed)
-      fail(what + ": accessor " + std::to_string(index) + " has the wrong type (" + std::to_string(found) +
-           " components; expected " + std::to_string(components) + ")");
-    components = found;
+    const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
+    require_components(components, allowed, what + ": accessor " + std::to_string(index));
+    if (components_found) *components_found = components;
     std::vector<float> values(accessor.count * components);
     const bool normalized = accessor.normalized;
     for_each_component(accessor, what, [&](size_t element, int component, const unsigned char* p) {
@@ -485,9 +491,6 @@ class GltfLoader {
       values[element * components + component] = v;
     });
     return values;
-  }
-  std::vector<float> read_floats(int index, int components, const std::string& what) const {
-    return read_floats(index, components, what, {});
   }
 
   std::vector<uint32_t> read_indices(int index, const std::string& what) const {
@@ -566,21 +569,17 @@ class GltfLoader {
       return draco_ ? draco_attributes_.count(attribute) > 0 : primitive_.attributes.count(attribute) > 0;
     }
 
-    // `components` as read_floats; the attribute must exist (has()).
-    std::vector<float> floats(const std::string& attribute, int& components,
-                              std::initializer_list<int> allowed_components) const {
+    // As read_floats; the attribute must exist (has()).
+    std::vector<float> floats(const std::string& attribute, std::initializer_list<int> allowed,
+                              int* components_found = nullptr) const {
       if (!draco_)
-        return loader_.read_floats(primitive_.attributes.at(attribute), components, what_ + " " + attribute,
-                                   allowed_components);
+        return loader_.read_floats(primitive_.attributes.at(attribute), allowed, what_ + " " + attribute,
+                                   components_found);
       const draco::PointAttribute* source = draco_->GetAttributeByUniqueId(draco_attributes_.at(attribute));
       if (!source) loader_.fail(what_ + ": the Draco data has no attribute for " + attribute);
-      const int found = source->num_components();
-      const bool allowed = allowed_components.size() ? std::find(allowed_components.begin(), allowed_components.end(),
-                                                                 found) != allowed_components.end()
-                                                     : found == components;
-      if (!allowed)
-        loader_.fail(what_ + ": Draco attribute " + attribute + " has " + std::to_string(found) + " components");
-      components = found;
+      const int components = source->num_components();
+      loader_.require_components(components, allowed, what_ + ": Draco attribute " + attribute);
+      if (components_found) *components_found = components;
       std::vector<float> values(size_t(draco_->num_points()) * components);
       for (draco::PointIndex point(0); point < draco_->num_points(); ++point)
         if (!source->ConvertValue<float>(source->mapped_index(point), components,
@@ -589,9 +588,6 @@ class GltfLoader {
       for (float v : values)
         if (!std::isfinite(v)) loader_.fail(what_ + ": Draco attribute " + attribute + " contains a non-finite value");
       return values;
-    }
-    std::vector<float> floats(const std::string& attribute, int components) const {
-      return floats(attribute, components, {});
     }
 
     // The triangle list's vertex indices; `vertex_count` when the primitive has none.
@@ -660,7 +656,7 @@ class GltfLoader {
       TriangleMesh out;
       out.name = what;
       out.material = material_index(primitive.material, what);
-      const std::vector<float> positions = source.floats("POSITION", 3);
+      const std::vector<float> positions = source.floats("POSITION", {3});
       const size_t vertex_count = positions.size() / 3;
       for (size_t v = 0; v < vertex_count; ++v)
         out.positions.push_back(world * Vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]));
@@ -683,7 +679,7 @@ class GltfLoader {
       // Without NORMAL the mesh stays flat (glTF 2.0 §3.7.2.1): the ray tracer shades each
       // face with its own normal.
       if (source.has("NORMAL")) {
-        const std::vector<float> normals = source.floats("NORMAL", 3);
+        const std::vector<float> normals = source.floats("NORMAL", {3});
         if (normals.size() != positions.size()) fail(what + ": NORMAL and POSITION counts differ");
         for (size_t v = 0; v < vertex_count; ++v) {
           const Vec3 n = normal_matrix * Vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
@@ -695,13 +691,13 @@ class GltfLoader {
         const std::string set = "TEXCOORD_" + std::to_string(material.texcoord);
         if (!source.has(set))
           fail(what + ": its material's texture reads " + set + ", which the primitive does not have");
-        const std::vector<float> uvs = source.floats(set, 2);
+        const std::vector<float> uvs = source.floats(set, {2});
         if (uvs.size() / 2 != vertex_count) fail(what + ": " + set + " and POSITION counts differ");
         for (size_t v = 0; v < vertex_count; ++v) out.uvs.push_back(Vec2(uvs[2 * v], uvs[2 * v + 1]));
       }
       if (source.has("COLOR_0")) {
-        int components = 3;
-        const std::vector<float> colors = source.floats("COLOR_0", components, {3, 4});
+        int components = 0;
+        const std::vector<float> colors = source.floats("COLOR_0", {3, 4}, &components);
         if (colors.size() / components != vertex_count) fail(what + ": COLOR_0 and POSITION counts differ");
         for (size_t v = 0; v < vertex_count; ++v) {  // alpha (coverage) is not modelled
           const float* c = &colors[v * components];
