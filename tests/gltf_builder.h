@@ -186,4 +186,19 @@ inline double srgb_decode(int byte) {
   return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
+// load_scene must throw glaze::Error mentioning every one of `words`.
+inline void expect_load_error(const TemporaryDirectory& dir, const std::string& path,
+                              const std::vector<std::string>& words) {
+  try {
+    load_scene(path);
+    ADD_FAILURE() << path << ": loaded without error";
+  } catch (const Error& e) {
+    const std::string message = without_directory(e.what(), dir);
+    for (const std::string& word : words)
+      EXPECT_NE(message.find(word), std::string::npos) << "'" << word << "' not in: " << message;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << path << ": threw a non-glaze exception: " << e.what();
+  }
+}
+
 }  // namespace glaze::testing

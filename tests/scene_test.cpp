@@ -38,20 +38,6 @@ using namespace testing;  // gltf_builder.h: GltfBuffer, gltf_document, write_gl
 
 // --- Running the command (as cli_test.cpp does). ---
 
-// `text` with the temporary directory's path replaced by "DIR", so that a word cannot be
-// found in the path (the test's name, the process id) instead of in the message.
-std::string without_directory(std::string text, const testing::TemporaryDirectory& dir) {
-  const std::string directory = dir.path().string();
-  for (size_t at; (at = text.find(directory)) != std::string::npos;) text.replace(at, directory.size(), "DIR");
-  return text;
-}
-
-std::string quoted(const std::string& path) { return "'" + path + "'"; }
-
-void expect_vec_near(const Vec3& actual, const Vec3& expected, float tolerance, const std::string& what = "") {
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(actual[k], expected[k], tolerance) << what << " component " << k;
-}
-
 // ---------------------------------------------------------------------------------------
 // 1. Loading: transforms and normals.
 // ---------------------------------------------------------------------------------------
@@ -748,21 +734,6 @@ json renderable_triangle_scene(GltfBuffer& buffer) {
       {"glaze", {{"environment", {{"procedural", "constant"}, {"width", 16}, {"height", 8}}}}}};
   buffer.into(gltf);
   return gltf;
-}
-
-// load_scene must throw glaze::Error mentioning every one of `words`.
-void expect_load_error(const testing::TemporaryDirectory& dir, const std::string& path,
-                       const std::vector<std::string>& words) {
-  try {
-    load_scene(path);
-    ADD_FAILURE() << path << ": loaded without error";
-  } catch (const Error& e) {
-    const std::string message = without_directory(e.what(), dir);
-    for (const std::string& word : words)
-      EXPECT_NE(message.find(word), std::string::npos) << "'" << word << "' not in: " << message;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << path << ": threw a non-glaze exception: " << e.what();
-  }
 }
 
 // `glaze render PATH --out x.exr [extra]` must fail cleanly and mention `word`.

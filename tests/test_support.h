@@ -95,6 +95,22 @@ class CapturedWarnings {
   WarningSink previous_;
 };
 
+// Each component of `actual` within `tolerance` of `expected`.
+inline void expect_vec_near(const Vec3& actual, const Vec3& expected, float tolerance, const std::string& what = "") {
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(actual[k], expected[k], tolerance) << what << " component " << k;
+}
+
+// `text` with the temporary directory's path replaced by "DIR", so that a word cannot be
+// found in the path (the test's name, the process id) instead of in the message.
+inline std::string without_directory(std::string text, const TemporaryDirectory& dir) {
+  const std::string directory = dir.path().string();
+  for (size_t at; (at = text.find(directory)) != std::string::npos;) text.replace(at, directory.size(), "DIR");
+  return text;
+}
+
+// A path quoted for the shell command line of run_glaze.
+inline std::string quoted(const std::string& path) { return "'" + path + "'"; }
+
 // The result of running the glaze command.
 struct CommandResult {
   int exit_code;
