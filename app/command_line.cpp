@@ -1,6 +1,7 @@
 #include "app/command_line.h"
 
 #include "renderer/error.h"
+#include "renderer/memory_budget.h"
 
 #include <algorithm>
 #include <cctype>
@@ -277,6 +278,19 @@ std::unique_ptr<CLI::App> make_command_app(const std::string& name) {
   auto app = std::make_unique<CLI::App>("", name == "glaze" ? name : "glaze " + name);
   app->formatter(std::make_shared<HelpFormatter>());
   app->set_help_flag("-h,--help", "print this help and exit");
+  if (name != "glaze" && name != "help") {
+    // Every command allocates according to its input; each allocation checks this limit.
+    app->add_option_function<std::string>(
+           "--memory-limit", [](const std::string& size) { set_memory_limit(parse_memory_size(size)); },
+           "the most memory one allocation may take, like 512M, 16G or none (default: 80% of the machine's, "
+           "or GLAZE_MEMORY_LIMIT)")
+        ->type_name("SIZE")
+        ->check(CLI::Validator(
+            [](std::string& size) {
+              return parse_memory_size(size) ? std::string() : "'" + size + "' is not a size like 512M, 16G or none";
+            },
+            ""));
+  }
   return app;
 }
 
@@ -289,6 +303,7 @@ std::string command_help(const std::string& name, CommandDeclaration declare) {
 int run_command(const std::string& name, CommandDeclaration declare, const std::vector<std::string>& args) {
   const auto app = make_command_app(name);
   const CommandRun run = declare(*app);
+  set_memory_limit(std::nullopt);  // the default, unless this command line sets one
   const std::string see = " (see `glaze " + name + " --help`)";
   refuse_repeats(*app, args, see);
   std::vector<std::string> reversed(args.rbegin(), args.rend());  // as CLI11 takes them

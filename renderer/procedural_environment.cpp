@@ -1,6 +1,8 @@
 #include "renderer/procedural_environment.h"
 
+#include "renderer/checked_math.h"
 #include "renderer/error.h"
+#include "renderer/memory_budget.h"
 #include "renderer/latlong.h"
 
 #include <tbb/parallel_for.h>
@@ -113,6 +115,8 @@ Image make_procedural_environment(const std::string& name, int width, int height
     throw Error("procedural environment '" + name + "': resolution must be positive, got " + std::to_string(width) +
                 "x" + std::to_string(height));
   }
+  require_memory(saturating_mul(uint64_t(width) * uint64_t(height), sizeof(RGB)),
+                 "procedural environment " + std::to_string(width) + "x" + std::to_string(height));
   std::function<RGB(const Vec3&)> radiance;
   if (name == "constant") {
     Image image(width, height);
