@@ -160,6 +160,19 @@ TEST(HostileInput, HugeFilmsAreRefusedBeforeAllocating) {
                         "sh film of camera 'view_0' (65536x65536) needs 64.0 GiB");
 }
 
+// The backstop behind the estimates: with the limit off, a film beyond the address space
+// that `ulimit -v` leaves ends in std::bad_alloc, which is exit 1 asking for a report.
+TEST(HostileInput, OutOfMemoryIsAnErrorNotAnInternalError) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "ASan reserves more address space than the ulimit below leaves";
+#endif
+  TemporaryDirectory dir;
+  const std::string render = "render " + quoted(testing::scenes_dir() + "red_sphere_office.gltf") + " --out " +
+                             quoted(dir.file("a.exr")) + " --memory-limit none --res 20000x20000";
+  expect_clear_failure(run_glaze(render, dir, std::string("ulimit -v 4000000; ") + kTimeout),
+                       "out of memory (glaze's estimate missed this: please report it)");
+}
+
 TEST(HostileInput, LargeMapsAreRefusedBeforeDecodingAndSampling) {
   TemporaryDirectory dir;
   const std::string map = dir.file("map.exr");
