@@ -195,6 +195,22 @@ TEST(HostileInput, LargeMapsAreRefusedBeforeDecodingAndSampling) {
                         "building the sampling tables of " + map + " needs 24.0 MiB");
 }
 
+TEST(HostileInput, FitAllocationsAreRefusedBeforeAllocating) {
+  TemporaryDirectory dir;
+  const std::string captures = dir.file("captures");
+  ASSERT_EQ(run_glaze("render " + quoted(testing::scenes_dir() + "red_sphere_office.gltf") + " --captures " +
+                          quoted(captures) + " --res 16x16 --integrator sh",
+                      dir)
+                .exit_code,
+            0);
+  const std::string fit = "invert-fit " + quoted(captures) + " --out " + quoted(dir.file("fit"));
+  // 2^26 points of 12 bytes; a 1024x512 texture of 400 bytes a texel.
+  expect_memory_refusal(run_glaze(fit + " --mode material --points 67108864 --memory-limit 256M", dir, kTimeout),
+                        "--points 67108864 needs 768.0 MiB");
+  expect_memory_refusal(run_glaze(fit + " --mode texture --texture-res 1024x512 --memory-limit 150M", dir, kTimeout),
+                        "the 1024x512 texture fit (--texture-res) needs 200.0 MiB");
+}
+
 TEST(HostileInput, TimeBudgetAndSamplesAreBounded) {
   TemporaryDirectory dir;
   const std::string render = "render " + quoted(testing::scenes_dir() + "red_sphere_office.gltf") +
