@@ -5,6 +5,9 @@
 #include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/image.h"
+#include "renderer/path_tracer.h"
+#include "renderer/ray_tracer.h"
+#include "renderer/render.h"
 #include "tests/test_support.h"
 
 #include <gtest/gtest.h>
@@ -219,6 +222,21 @@ TEST(HostileInput, TimeBudgetAndSamplesAreBounded) {
   expect_clear_failure(run_glaze(render + " --time-budget 1e30", dir, kTimeout), "--time-budget");
   expect_clear_failure(run_glaze(render + " --time-budget 691200", dir, kTimeout), "--time-budget");
   expect_clear_failure(run_glaze(render + " --spp 2147483648", dir, kTimeout), "--spp");
+}
+
+// The samples of a pixel are numbered pass * spp + s in 32 bits: a render takes at most
+// 2^30, and a pass that would go past that is refused before it starts.
+TEST(HostileInput, SamplesPerPixelStayBelowTheirCount) {
+  const Scene scene = testing::sphere_scene(0.04f, RGB(0.8f, 0.1f, 0.1f));
+  const Environment environment(Image(16, 8), {});
+  const RayTracer tracer(scene);
+  const PathTracer path(scene, tracer, environment, PathTracerOptions{});
+  RenderOptions options;
+  options.spp = kMaxSamplesPerPixel + 1;
+  EXPECT_THROW(ProgressiveRender(path, testing::front_camera(1), options), Error);
+  options.spp = kMaxSamplesPerPixel;
+  const ProgressiveRender passes(path, testing::front_camera(1), options);
+  EXPECT_FALSE(passes.full());  // one pass of 2^30 fits
 }
 
 }  // namespace
