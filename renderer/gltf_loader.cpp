@@ -1,14 +1,22 @@
 // gltf_loader.cpp: glTF 2.0 (.gltf, .glb) -> Scene, with tinygltf (docs/design.md §4).
 //
 // Every index the file contains is checked before it is followed, so that a malformed
-// file gives a glaze::Error naming the element at fault instead of undefined behaviour.
+// file gives a glaze::Error naming the element at fault instead of undefined behaviour:
+// the JSON is parsed first with its depth bounded and every index and size in it checked
+// to be a whole number in range (tinygltf recurses over deep JSON and casts numbers
+// without checking), byte ranges are checked without overflow before anything is read or
+// allocated, and the node hierarchy is walked without recursion.
 // Images are decoded by OpenImageIO (tinygltf's own decoder is bypassed) so that EXR
 // textures work and 8-bit ones are linearised from sRGB like every other image in glaze.
 // Draco-compressed primitives are decoded here with the Draco library (Debian's tinygltf
 // is built without it). What a file uses that glaze does not model is counted and
 // reported in one warning per scene; what glaze cannot read at all (a required extension
 // it does not know, meshopt-compressed buffers) is refused by name.
+#include "renderer/checked_math.h"
 #include "renderer/error.h"
+#include "renderer/input_file.h"
+#include "renderer/json_input.h"
+#include "renderer/memory_budget.h"
 #include "renderer/scene.h"
 
 #include <tiny_gltf.h>
@@ -20,8 +28,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <climits>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
@@ -53,18 +61,19 @@ class GltfLoader {
       for (int i = 0; i < static_cast<int>(model_.nodes.size()); ++i) {
         if (children.count(i)) continue;
         any_root = true;
-        visit_node(i, Eigen::Affine3f::Identity());
+        visit_tree(i);
       }
       if (!any_root && !model_.nodes.empty()) fail("every node is some node's child: the node hierarchy has a cycle");
     } else {
       if (scene_index >= static_cast<int>(model_.scenes.size()))
         fail("defaultScene " + std::to_string(scene_index) + " does not exist");
       const tinygltf::Scene& scene = model_.scenes[scene_index];
-      for (int node : scene.nodes) visit_node(node, Eigen::Affine3f::Identity());
+      for (int node : scene.nodes) visit_tree(node);
       read_scene_extras(scene.extras);
     }
     if (scene_.meshes.empty() && scene_.spheres.empty())
       fail("the scene contains no geometry (no mesh and no glaze sphere)");
+    warn_about_blind_cameras();
     warn_about_ignored_features();
     return std::move(scene_);
   }
@@ -75,18 +84,23 @@ class GltfLoader {
   std::filesystem::path directory() const { return std::filesystem::path(path_).parent_path(); }
 
   void read_model() {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path_, ec))
-      throw Error(path_ + ": no such scene file (expected a .gltf or .glb glTF 2.0 file)");
-    std::ifstream stream(path_, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
-    if (!stream.good() && !stream.eof()) fail("cannot be read");
+    std::string bytes = read_whole_file(path_, "glTF scene (a .gltf or .glb file)");
     const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
-    without_draco_indices(bytes, binary);
+    const auto [json_begin, json_size] = json_chunk(bytes, binary);
+    nlohmann::json document;
+    try {
+      document = parse_json_limited(std::string_view(bytes).substr(json_begin, json_size), path_);
+    } catch (const Error& e) {
+      throw Error(e.what() + std::string(" (a glTF 2.0 scene was expected)"));
+    }
+    check_numbers(document);
+    if (without_draco_indices(document)) replace_json(bytes, binary, json_begin, json_size, document.dump());
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&GltfLoader::decode_image, this);
+    loader.SetFsCallbacks({&file_exists, &unexpanded_path, &read_uri_file, &tinygltf::WriteWholeFile, nullptr});
     std::string error, warning;
     const std::string base = directory().string();
+    if (bytes.size() > UINT_MAX) fail("is larger than 4 GiB, which tinygltf cannot read");
     const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
     const bool ok =
         binary ? loader.LoadBinaryFromMemory(&model_, &error, &warning, data, unsigned(bytes.size()), base)
@@ -105,6 +119,29 @@ class GltfLoader {
            "`gltf-transform png IN OUT` re-encodes KTX2/Basis textures)");
     }
     if (!ok) fail("cannot be loaded as glTF 2.0: " + (error.empty() ? std::string("unknown error") : error));
+  }
+
+  // A camera with every mesh and sphere behind it renders the environment only; the
+  // usual cause is a wrong rotation or scale in the file, so it is worth a warning. Each
+  // piece of geometry is bounded by a sphere, so that the test errs towards silence.
+  void warn_about_blind_cameras() const {
+    std::vector<std::pair<Vec3, float>> bounds;  // centre, radius
+    for (const Sphere& sphere : scene_.spheres) bounds.emplace_back(sphere.center, sphere.radius);
+    for (const TriangleMesh& mesh : scene_.meshes) {
+      Eigen::AlignedBox3f box;
+      for (const Vec3& p : mesh.positions) box.extend(p);
+      bounds.emplace_back(box.center(), 0.5f * box.diagonal().norm());
+    }
+    for (const CameraSpec& camera : scene_.cameras) {
+      const Vec3 eye = camera.camera_to_world.translation();
+      const Vec3 forward = -camera.camera_to_world.linear().col(2);  // a glTF camera looks along its -Z
+      const bool sees_some = std::any_of(bounds.begin(), bounds.end(), [&](const auto& bound) {
+        return (bound.first - eye).dot(forward) + bound.second > 0.0f;
+      });
+      if (!sees_some)
+        warn(path_ + ": camera '" + camera.name +
+             "' sees none of the scene: every mesh and sphere lies behind it (check its node's rotation and scale)");
+    }
   }
 
   // One warning listing what the file uses that glaze does not model, with counts.
@@ -132,33 +169,20 @@ class GltfLoader {
          "(baseColor); see docs/guide.md for each glTF feature.");
   }
 
-  // tinygltf, built without Draco, refuses a primitive whose indices accessor has no
-  // bufferView, which is how Draco-compressed primitives are written. Their indices come
-  // from the Draco data, so the reference is dropped from the JSON (the .glb's JSON chunk)
-  // before tinygltf reads it. Files without Draco are handed over untouched.
-  void without_draco_indices(std::string& bytes, bool binary) const {
-    const std::string_view draco = "KHR_draco_mesh_compression";
-    if (bytes.find(draco) == std::string::npos) return;
-    size_t json_begin = 0, json_size = bytes.size();
-    if (binary) {
-      uint32_t chunk_size = 0, chunk_type = 0;
-      if (bytes.size() < 20) fail("the .glb file is truncated");
-      std::memcpy(&chunk_size, bytes.data() + 12, 4);
-      std::memcpy(&chunk_type, bytes.data() + 16, 4);
-      if (chunk_type != 0x4E4F534Au || 20 + size_t(chunk_size) > bytes.size())
-        fail("the .glb file's first chunk is not its JSON");
-      json_begin = 20, json_size = chunk_size;
-    }
-    nlohmann::json document =
-        nlohmann::json::parse(bytes.begin() + json_begin, bytes.begin() + json_begin + json_size, nullptr, false);
-    if (!document.is_object() || !document.contains("meshes") || !document["meshes"].is_array()) return;
-    for (auto& mesh : document["meshes"])
-      if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
-        for (auto& primitive : mesh["primitives"])
-          if (primitive.is_object() && primitive.contains("extensions") && primitive["extensions"].is_object() &&
-              primitive["extensions"].contains(draco))
-            primitive.erase("indices");
-    std::string text = document.dump();
+  // Where the JSON is in `bytes`: all of a .gltf, the first chunk of a .glb.
+  std::pair<size_t, size_t> json_chunk(const std::string& bytes, bool binary) const {
+    if (!binary) return {0, bytes.size()};
+    uint32_t chunk_size = 0, chunk_type = 0;
+    if (bytes.size() < 20) fail("the .glb file is truncated");
+    std::memcpy(&chunk_size, bytes.data() + 12, 4);
+    std::memcpy(&chunk_type, bytes.data() + 16, 4);
+    if (chunk_type != 0x4E4F534Au || chunk_size > bytes.size() - 20)
+      fail("the .glb file's first chunk is not its JSON");
+    return {20, chunk_size};
+  }
+
+  // Replaces the JSON of `bytes` (at json_begin, json_size) by `text`.
+  static void replace_json(std::string& bytes, bool binary, size_t json_begin, size_t json_size, std::string text) {
     if (!binary) {
       bytes = std::move(text);
       return;
@@ -173,6 +197,106 @@ class GltfLoader {
     bytes = std::move(glb);
   }
 
+  // tinygltf, built without Draco, refuses a primitive whose indices accessor has no
+  // bufferView, which is how Draco-compressed primitives are written. Their indices come
+  // from the Draco data, so the reference is dropped from the JSON before tinygltf reads
+  // it. Returns whether anything was dropped (files without Draco are handed over untouched).
+  static bool without_draco_indices(nlohmann::json& document) {
+    const std::string draco = "KHR_draco_mesh_compression";
+    bool changed = false;
+    if (!document.is_object() || !document.contains("meshes") || !document["meshes"].is_array()) return false;
+    for (auto& mesh : document["meshes"])
+      if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
+        for (auto& primitive : mesh["primitives"])
+          if (primitive.is_object() && primitive.contains("extensions") && primitive["extensions"].is_object() &&
+              primitive["extensions"].contains(draco))
+            changed |= primitive.erase("indices") > 0;
+    return changed;
+  }
+
+  // Checks every index and size in the glTF JSON that tinygltf or glaze will read before
+  // tinygltf reads it: tinygltf casts integers to int without a check (2^32 becomes 0)
+  // and silently skips an index that is not an integer (a material of 1e300 or "0" would
+  // become the default material). Indices must be whole numbers in [0, 2^31 - 1], sizes
+  // and offsets whole numbers in [0, 2^53]. Under "extras" only glaze's own object is
+  // checked, under "extensions" only the extensions glaze reads. Iterative: the JSON is
+  // at most kMaxJsonDepth deep, but wide.
+  void check_numbers(const nlohmann::json& document) const {
+    static const std::set<std::string> kIndexKeys = {
+        "scene",      "nodes",  "children", "mesh",   "camera", "skin",     "material", "indices", "attributes",
+        "bufferView", "buffer", "sampler",  "source", "index",  "texCoord", "joints",   "skeleton"};
+    static const std::set<std::string> kSizeKeys = {"count", "byteOffset", "byteLength", "byteStride"};
+    constexpr int64_t kMaxIndex = INT_MAX, kMaxSize = int64_t(1) << 53;
+    const auto require = [&](const nlohmann::json& value, int64_t highest, const std::string& where) {
+      if (value.is_number() && integer_from(value.get<double>(), 0, highest)) return;
+      fail(where + " must be " +
+           (highest == kMaxIndex ? "an index (a whole number from 0 to 2147483647)" : "a whole number from 0 to 2^53") +
+           ", not " + json_excerpt(value));
+    };
+    struct Pending {
+      const nlohmann::json* value;
+      std::string where;
+      bool glaze_extras;  // tinygltf hands these on with every integer cast to int
+    };
+    std::vector<Pending> pending = {{&document, "", false}};
+    while (!pending.empty()) {
+      const auto [value, where, glaze_extras] = std::move(pending.back());
+      pending.pop_back();
+      if (value->is_array()) {
+        for (size_t i = 0; i < value->size(); ++i)
+          pending.push_back({&(*value)[i], where + "[" + std::to_string(i) + "]", glaze_extras});
+        continue;
+      }
+      if (glaze_extras && value->is_number_integer() && !integer_from(value->get<double>(), INT_MIN, INT_MAX))
+        fail(where + " must be below 2^31 (as a whole number), not " + json_excerpt(*value));
+      if (!value->is_object()) continue;
+      for (const auto& [key, member] : value->items()) {
+        const std::string path = where.empty() ? key : where + "." + key;
+        if (key == "extras" || key == "extensions") {  // only what glaze reads
+          if (!member.is_object()) continue;
+          for (const auto& [name, extension] : member.items())
+            if (key == "extras" ? name == "glaze" : kSupportedExtensions.count(name) > 0)
+              pending.push_back({&extension, path + "." + name, glaze_extras || key == "extras"});
+        } else if (kSizeKeys.count(key)) {
+          require(member, kMaxSize, path);
+        } else if (kIndexKeys.count(key) && !member.is_structured()) {
+          require(member, kMaxIndex, path);
+        } else if ((key == "attributes" || key == "nodes" || key == "children" || key == "joints") &&
+                   member.is_structured()) {
+          // Lists and maps of indices; "nodes" at the top is the list of node objects.
+          for (const auto& [name, entry] : member.items()) {
+            const std::string entry_path = path + (member.is_array() ? "[" + name + "]" : "." + name);
+            if (entry.is_structured())
+              pending.push_back({&entry, entry_path, glaze_extras});
+            else
+              require(entry, kMaxIndex, entry_path);
+          }
+        } else {
+          pending.push_back({&member, path, glaze_extras});
+        }
+      }
+    }
+  }
+
+  // tinygltf's file access for buffer and image URIs: FIFOs and devices are refused
+  // (tinygltf's own would open them, and block or read forever), sizes are checked
+  // against the memory limit, and paths are taken as they are (no shell-like expansion).
+  static bool file_exists(const std::string& path, void*) {
+    std::error_code ec;
+    return std::filesystem::exists(path, ec);
+  }
+  static std::string unexpanded_path(const std::string& path, void*) { return path; }
+  static bool read_uri_file(std::vector<unsigned char>* out, std::string* error, const std::string& path, void*) {
+    try {
+      const std::string bytes = read_whole_file(path, "glTF buffer or image");
+      out->assign(bytes.begin(), bytes.end());
+      return true;
+    } catch (const Error& e) {
+      if (error) *error += e.what();
+      return false;
+    }
+  }
+
   // tinygltf hands every image's bytes here (external file, data URI or .glb chunk).
   static bool decode_image(tinygltf::Image* image, const int index, std::string* error, std::string*, int, int,
                            const unsigned char* bytes, int size, void* self_pointer) {
@@ -182,6 +306,11 @@ class GltfLoader {
       hint = image->mimeType == "image/jpeg" ? "image.jpg" : image->mimeType == "image/png" ? "image.png" : "image.exr";
     }
     try {
+      if (image->bufferView >= 0) {  // tinygltf passes the view's bytes without checking its range
+        const Bytes view = self->view_bytes(image->bufferView, "image " + std::to_string(index));
+        bytes = view.data, size = view.size > size_t(INT_MAX) ? -1 : int(view.size);
+      }
+      if (size < 0) throw Error("its data is larger than 2 GiB");
       self->decoded_[index] = read_image_from_memory(bytes, static_cast<size_t>(size), hint);
     } catch (const Error& e) {
       if (error) *error = std::string("image ") + std::to_string(index) + ": " + e.what();
@@ -199,6 +328,19 @@ class GltfLoader {
     const double n = value.GetNumberAsDouble();
     if (!std::isfinite(n)) fail(what + " must be finite");
     return n;
+  }
+
+  // A whole number in [lowest, highest] (an int cast of any other double is undefined).
+  int64_t integer(const Value& value, int64_t lowest, int64_t highest, const std::string& what) const {
+    const std::optional<int64_t> result =
+        value.IsNumber() ? integer_from(value.GetNumberAsDouble(), lowest, highest) : std::nullopt;
+    if (!result) {
+      char shown[64] = "not a number";
+      if (value.IsNumber()) std::snprintf(shown, sizeof shown, "%.17g", value.GetNumberAsDouble());
+      fail(what + " must be a whole number from " + std::to_string(lowest) + " to " + std::to_string(highest) +
+           ", not " + (value.IsString() ? "\"" + value.Get<std::string>() + "\"" : std::string(shown)));
+    }
+    return *result;
   }
 
   RGB rgb(const Value& value, const std::string& what) const {
@@ -274,7 +416,7 @@ class GltfLoader {
     const float c = std::cos(rotation), s = std::sin(rotation);
     material.uv_transform << c * scale.x(), s * scale.y(), offset.x(), -s * scale.x(), c * scale.y(), offset.y();
     if (const Value* texcoord = member(it->second, "texCoord"))
-      material.texcoord = int(number(*texcoord, where + ".texCoord"));
+      material.texcoord = int(integer(*texcoord, 0, INT_MAX, where + ".texCoord"));
   }
 
   static Wrap wrap_mode(int gl_mode) {
@@ -346,25 +488,53 @@ class GltfLoader {
     return transform;
   }
 
-  void visit_node(int index, const Eigen::Affine3f& parent) {
-    if (index < 0 || index >= static_cast<int>(model_.nodes.size()))
-      fail("node index " + std::to_string(index) + " does not exist");
-    if (!on_path_.insert(index).second)
-      fail("node " + std::to_string(index) + " is its own ancestor (the node hierarchy has a cycle)");
-    const tinygltf::Node& node = model_.nodes[index];
-    const std::string what = "node " + std::to_string(index) + (node.name.empty() ? "" : " '" + node.name + "'");
-    const Eigen::Affine3f world = parent * local_transform(node, what);
-    if (!world.matrix().allFinite()) fail(what + ": transform is not finite");
-
-    if (node.mesh >= 0) add_mesh(node.mesh, world, what);
-    if (node.camera >= 0) add_camera(node.camera, node.name, world, what);
-    if (const Value* glaze = member(node.extras, "glaze"))
-      if (const Value* sphere = member(*glaze, "sphere")) add_sphere(*sphere, world, what);
-    for (int child : node.children) visit_node(child, world);
-    on_path_.erase(index);
+  // Adds what the hierarchy below node `root` carries. Depth first with an explicit stack:
+  // a chain of 100,000 nodes must not overflow the call stack. Nodes shared by several
+  // parents are visited once per path, so the visits are capped (a tree of shared nodes
+  // 60 levels deep has 2^60 paths).
+  void visit_tree(int root) {
+    struct Frame {
+      int node;
+      Eigen::Affine3f world;
+      bool negative_scale;  // some node on the path from the root has a negative scale
+      size_t next_child = 0;
+    };
+    std::vector<Frame> stack;
+    const auto enter = [&](int index, const Eigen::Affine3f& parent, bool negative_scale) {
+      if (index < 0 || index >= static_cast<int>(model_.nodes.size()))
+        fail("node index " + std::to_string(index) + " does not exist");
+      if (++node_visits_ > kMaxNodeVisits)
+        fail("the node hierarchy has more than " + std::to_string(kMaxNodeVisits) +
+             " node visits (nodes shared by many parents repeat their subtrees); flatten it");
+      if (!on_path_.insert(index).second)
+        fail("node " + std::to_string(index) + " is its own ancestor (the node hierarchy has a cycle)");
+      const tinygltf::Node& node = model_.nodes[index];
+      const std::string what = "node " + std::to_string(index) + (node.name.empty() ? "" : " '" + node.name + "'");
+      const Eigen::Affine3f world = parent * local_transform(node, what);
+      if (!world.matrix().allFinite()) fail(what + ": transform is not finite");
+      negative_scale |= std::any_of(node.scale.begin(), node.scale.end(), [](double s) { return s < 0.0; });
+      if (node.mesh >= 0) add_mesh(node.mesh, world, what);
+      if (node.camera >= 0) add_camera(node.camera, node.name, world, negative_scale, what);
+      if (const Value* glaze = member(node.extras, "glaze"))
+        if (const Value* sphere = member(*glaze, "sphere")) add_sphere(*sphere, world, what);
+      stack.push_back({index, world, negative_scale});
+    };
+    enter(root, Eigen::Affine3f::Identity(), false);
+    while (!stack.empty()) {
+      Frame& top = stack.back();
+      const std::vector<int>& children = model_.nodes[top.node].children;
+      if (top.next_child == children.size()) {
+        on_path_.erase(top.node);
+        stack.pop_back();
+        continue;
+      }
+      const Eigen::Affine3f parent = top.world;  // `top` moves when the stack grows
+      enter(children[top.next_child++], parent, top.negative_scale);
+    }
   }
 
-  void add_camera(int index, const std::string& node_name, const Eigen::Affine3f& world, const std::string& what) {
+  void add_camera(int index, const std::string& node_name, const Eigen::Affine3f& world, bool negative_scale,
+                  const std::string& what) {
     if (index >= static_cast<int>(model_.cameras.size()))
       fail(what + ": camera " + std::to_string(index) + " does not exist");
     const tinygltf::Camera& camera = model_.cameras[index];
@@ -377,6 +547,11 @@ class GltfLoader {
       if (existing.name == name) name.append("_").append(std::to_string(scene_.cameras.size()));
     spec.name = name;
     spec.camera_to_world = camera_pose(world, what);
+    // Two negative scale components (det > 0) are a half turn that nothing reports:
+    // (-1, 1, -1) makes the camera look along +Z.
+    if (negative_scale && world.linear().determinant() >= 0.0f)
+      warn(path_ + ": " + what + ": a negative scale on the camera's node or its parents turns the camera (it " +
+           "looks along the transformed -Z axis); if it looks the wrong way, use a rotation instead");
     if (camera.type == "perspective") {
       spec.yfov = float(camera.perspective.yfov);
       spec.aspect = float(camera.perspective.aspectRatio);
@@ -423,7 +598,8 @@ class GltfLoader {
     if (std::abs(s0 - s1) > 1e-4f * s0 || std::abs(s0 - s2) > 1e-4f * s0)
       fail(what + ": a glaze sphere's node must not be scaled non-uniformly");
     if (!(r * s0 > 0.0f)) fail(what + ": sphere radius must be positive");
-    const int material_number = material ? int(number(*material, what + " sphere material")) : -1;
+    const int material_number =
+        material ? int(integer(*material, 0, INT_MAX, what + " extras.glaze.sphere.material")) : -1;
     scene_.spheres.push_back(
         {what, world.translation(), r * s0, material_index(material_number, what), world.rotation()});
   }
@@ -457,12 +633,15 @@ class GltfLoader {
   std::vector<float> read_floats(int index, std::initializer_list<int> allowed, const std::string& what,
                                  int* components_found = nullptr) const {
     const tinygltf::Accessor& accessor = accessor_at(index, what);
-    const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
+    const AccessorData data = accessor_data(index, what);
+    const int components = data.components;
     require_components(components, allowed, what + ": accessor " + std::to_string(index));
     if (components_found) *components_found = components;
-    std::vector<float> values(accessor.count * components);
+    require_memory(saturating_mul(data.count, components * sizeof(float)),
+                   what + " (accessor " + std::to_string(index) + ")");
+    std::vector<float> values(data.count * components);
     const bool normalized = accessor.normalized;
-    for_each_component(accessor, what, [&](size_t element, int component, const unsigned char* p) {
+    for_each_component(data, [&](size_t element, int component, const unsigned char* p) {
       float v = 0.0f;
       const auto integer = [&](auto raw, float largest) {
         std::memcpy(&raw, p, sizeof(raw));
@@ -496,8 +675,10 @@ class GltfLoader {
   std::vector<uint32_t> read_indices(int index, const std::string& what) const {
     const tinygltf::Accessor& accessor = accessor_at(index, what);
     if (accessor.type != TINYGLTF_TYPE_SCALAR) fail(what + ": index accessor must be SCALAR");
-    std::vector<uint32_t> indices(accessor.count);
-    for_each_component(accessor, what, [&](size_t element, int, const unsigned char* p) {
+    const AccessorData data = accessor_data(index, what);
+    require_memory(saturating_mul(data.count, sizeof(uint32_t)), what + " (accessor " + std::to_string(index) + ")");
+    std::vector<uint32_t> indices(data.count);
+    for_each_component(data, [&](size_t element, int, const unsigned char* p) {
       switch (accessor.componentType) {
         case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
           indices[element] = *p;
@@ -526,33 +707,67 @@ class GltfLoader {
     return accessor;
   }
 
-  void for_each_component(const tinygltf::Accessor& accessor, const std::string& what,
-                          const std::function<void(size_t, int, const unsigned char*)>& visit) const {
-    if (accessor.bufferView < 0 || accessor.bufferView >= static_cast<int>(model_.bufferViews.size()))
-      fail(what + ": accessor refers to bufferView " + std::to_string(accessor.bufferView) + ", which does not exist");
-    const tinygltf::BufferView& view = model_.bufferViews[accessor.bufferView];
+  // Bytes inside a buffer: a bufferView, or where an accessor's elements lie.
+  struct Bytes {
+    const unsigned char* data;
+    size_t size;
+  };
+
+  // The bytes of bufferView `index`, checked to lie inside its buffer. Accessors, Draco
+  // data and images all read through here. No sum is formed: an offset near 2^64 would wrap.
+  Bytes view_bytes(int index, const std::string& what) const {
+    if (index < 0 || index >= static_cast<int>(model_.bufferViews.size()))
+      fail(what + ": bufferView " + std::to_string(index) + " does not exist");
+    const tinygltf::BufferView& view = model_.bufferViews[index];
     if (view.extensions.count("EXT_meshopt_compression") || view.extensions.count("KHR_meshopt_compression"))
       fail(what +
            ": its data is compressed with EXT_meshopt_compression, which glaze cannot decode "
            "(decompress the file first, e.g. `gltf-transform copy IN OUT`)");
     if (view.buffer < 0 || view.buffer >= static_cast<int>(model_.buffers.size()))
-      fail(what + ": bufferView " + std::to_string(accessor.bufferView) + " refers to buffer " +
-           std::to_string(view.buffer) + ", which does not exist");
+      fail(what + ": bufferView " + std::to_string(index) + " refers to buffer " + std::to_string(view.buffer) +
+           ", which does not exist");
     const std::vector<unsigned char>& data = model_.buffers[view.buffer].data;
-    const int stride = accessor.ByteStride(view);
+    if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+      fail(what + ": bufferView " + std::to_string(index) + " (byteOffset " + std::to_string(view.byteOffset) +
+           ", byteLength " + std::to_string(view.byteLength) + ") reaches past the end of buffer " +
+           std::to_string(view.buffer) + " (" + std::to_string(data.size()) +
+           " bytes; is the .bin file missing or truncated?)");
+    return {data.data() + view.byteOffset, view.byteLength};
+  }
+
+  // Where accessor `index`'s elements lie: `count` elements of `components` components
+  // of `component_size` bytes, one every `stride` bytes from `base`, all checked to lie
+  // inside its bufferView without forming a product that could wrap.
+  struct AccessorData {
+    const unsigned char* base;
+    size_t count, stride, component_size;
+    int components;
+  };
+  AccessorData accessor_data(int index, const std::string& what) const {
+    const tinygltf::Accessor& accessor = accessor_at(index, what);
+    const std::string subject = what + ": accessor " + std::to_string(index);
+    const Bytes view = view_bytes(accessor.bufferView, subject);
+    const int stride = accessor.ByteStride(model_.bufferViews[accessor.bufferView]);
     const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(accessor.componentType));
     const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
-    if (stride <= 0 || component_size <= 0 || components <= 0) fail(what + ": accessor has an invalid layout");
+    if (stride <= 0 || component_size <= 0 || components <= 0) fail(subject + " has an invalid layout");
     const size_t element_size = size_t(component_size) * components;
-    if (accessor.count > 0) {
-      const size_t last = view.byteOffset + accessor.byteOffset + (accessor.count - 1) * size_t(stride) + element_size;
-      if (last > view.byteOffset + view.byteLength || view.byteOffset + view.byteLength > data.size())
-        fail(what + ": accessor reads past the end of buffer " + std::to_string(view.buffer) + " (" +
-             std::to_string(data.size()) + " bytes; is the .bin file missing or truncated?)");
-    }
-    const unsigned char* base = data.data() + view.byteOffset + accessor.byteOffset;
-    for (size_t e = 0; e < accessor.count; ++e)
-      for (int c = 0; c < components; ++c) visit(e, c, base + e * size_t(stride) + size_t(c) * component_size);
+    const bool fits = accessor.byteOffset <= view.size &&
+                      (accessor.count == 0 ||
+                       (element_size <= view.size - accessor.byteOffset &&
+                        accessor.count - 1 <= (view.size - accessor.byteOffset - element_size) / size_t(stride)));
+    if (!fits)
+      fail(subject + ": " + std::to_string(accessor.count) + " elements of " + std::to_string(element_size) +
+           " bytes, " + std::to_string(stride) + " bytes apart from byteOffset " + std::to_string(accessor.byteOffset) +
+           ", do not fit in bufferView " + std::to_string(accessor.bufferView) + " (" + std::to_string(view.size) +
+           " bytes)");
+    return {view.data + accessor.byteOffset, accessor.count, size_t(stride), size_t(component_size), components};
+  }
+
+  static void for_each_component(const AccessorData& data,
+                                 const std::function<void(size_t, int, const unsigned char*)>& visit) {
+    for (size_t e = 0; e < data.count; ++e)
+      for (int c = 0; c < data.components; ++c) visit(e, c, data.base + e * data.stride + c * data.component_size);
   }
 
   // A primitive's vertex attributes and indices, read from its accessors or decoded from
@@ -610,16 +825,11 @@ class GltfLoader {
       const Value* attributes = member(extension, "attributes");
       if (!view_value || !attributes || !attributes->IsObject())
         loader_.fail(what_ + ": KHR_draco_mesh_compression needs bufferView and attributes");
-      const double view_index = loader_.number(*view_value, what_ + " KHR_draco_mesh_compression.bufferView");
-      if (view_index < 0 || view_index >= double(loader_.model_.bufferViews.size()))
-        loader_.fail(what_ + ": KHR_draco_mesh_compression.bufferView does not exist");
-      const tinygltf::BufferView& view = loader_.model_.bufferViews[size_t(view_index)];
-      if (view.buffer < 0 || view.buffer >= static_cast<int>(loader_.model_.buffers.size()) ||
-          view.byteOffset + view.byteLength > loader_.model_.buffers[view.buffer].data.size())
-        loader_.fail(what_ + ": KHR_draco_mesh_compression's bufferView lies outside its buffer");
+      const auto view_index =
+          loader_.integer(*view_value, 0, INT_MAX, what_ + " KHR_draco_mesh_compression.bufferView");
+      const Bytes view = loader_.view_bytes(int(view_index), what_ + " KHR_draco_mesh_compression");
       draco::DecoderBuffer buffer;
-      buffer.Init(reinterpret_cast<const char*>(loader_.model_.buffers[view.buffer].data.data() + view.byteOffset),
-                  view.byteLength);
+      buffer.Init(reinterpret_cast<const char*>(view.data), view.size);
       draco::Decoder decoder;
       auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
       if (!decoded.ok())
@@ -627,7 +837,8 @@ class GltfLoader {
                      decoded.status().error_msg_string() + ")");
       draco_ = std::move(decoded).value();
       for (const std::string& key : attributes->Keys())
-        draco_attributes_[key] = int(loader_.number(attributes->Get(key), what_ + " Draco attribute " + key));
+        draco_attributes_[key] = int(
+            loader_.integer(attributes->Get(key), 0, INT_MAX, what_ + " KHR_draco_mesh_compression.attributes." + key));
     }
 
     const GltfLoader& loader_;
@@ -715,10 +926,8 @@ class GltfLoader {
       const Value* w = member(*film, "width");
       const Value* h = member(*film, "height");
       if (!w || !h) fail("scene extras.glaze.film needs width and height");
-      const double width = number(*w, "film width"), height = number(*h, "film height");
-      if (width < 1 || height < 1 || width > 65536 || height > 65536 || width != std::floor(width) ||
-          height != std::floor(height))
-        fail("scene extras.glaze.film must be whole numbers of pixels in [1, 65536]");
+      const auto width = integer(*w, 1, 65536, "scene extras.glaze.film.width");
+      const auto height = integer(*h, 1, 65536, "scene extras.glaze.film.height");
       scene_.film = std::pair{int(width), int(height)};
     }
     if (const Value* environment = member(*glaze, "environment")) {
@@ -730,8 +939,13 @@ class GltfLoader {
       } else if (const Value* procedural = member(*environment, "procedural")) {
         if (!procedural->IsString()) fail("scene extras.glaze.environment.procedural must be a string");
         spec.source = "procedural:" + procedural->Get<std::string>();
-        if (const Value* w = member(*environment, "width")) spec.width = int(number(*w, "environment width"));
-        if (const Value* h = member(*environment, "height")) spec.height = int(number(*h, "environment height"));
+        const std::string where = "scene extras.glaze.environment";
+        if (const Value* w = member(*environment, "width")) spec.width = int(integer(*w, 1, 65536, where + ".width"));
+        if (const Value* h = member(*environment, "height"))
+          spec.height = int(integer(*h, 1, 65536, where + ".height"));
+        require_memory(saturating_mul(uint64_t(spec.width) * uint64_t(spec.height), sizeof(RGB)),
+                       where + " (a procedural map of " + std::to_string(spec.width) + "x" +
+                           std::to_string(spec.height) + " texels)");
       } else {
         fail("scene extras.glaze.environment needs \"file\" or \"procedural\"");
       }
@@ -757,7 +971,9 @@ class GltfLoader {
   std::map<int, Image> decoded_;
   std::map<int, int> texture_of_gltf_texture_;  // a texture is an image and a sampler
   std::map<std::string, int> ignored_;          // feature -> count, for the one warning
+  static constexpr int64_t kMaxNodeVisits = 1000000;
   std::set<int> on_path_;
+  int64_t node_visits_ = 0;
   int default_material_ = -1;
 };
 

@@ -32,19 +32,24 @@ struct BilinearFootprint {
 
 namespace image_lookup_detail {
 
+// x clamped to [0, highest], NaN to 0 (std::clamp passes NaN through, and converting a
+// NaN index to int is undefined): std::max(0, NaN) is 0.
+[[gnu::always_inline]] inline float clamp_index(float x, float highest) { return std::min(std::max(0.0f, x), highest); }
+
 // t mod n for a whole number t (as a float): the quotient is taken at t + 0.5, half a
 // texel from where it steps, so that its rounding cannot make it step early or late.
-// The clamp only matters beyond 2^22 texels, where float quotients are too coarse.
+// The clamp only matters beyond 2^22 texels, where float quotients are too coarse, and
+// for infinite t (Inf - Inf is NaN).
 [[gnu::always_inline]] inline float floor_mod(float t, float n) {
   const float inverse = 1.0f / n;
-  return std::clamp(t - n * std::floor(t * inverse + 0.5f * inverse), 0.0f, n - 1.0f);
+  return clamp_index(t - n * std::floor(t * inverse + 0.5f * inverse), n - 1.0f);
 }
 
 // The texel that whole number t names on an axis of n texels.
 [[gnu::always_inline]] inline float wrap_index(float t, float n, Wrap wrap) {
   switch (wrap) {
     case Wrap::clamp:
-      return std::clamp(t, 0.0f, n - 1.0f);
+      return clamp_index(t, n - 1.0f);
     case Wrap::repeat:
       return floor_mod(t, n);
     case Wrap::mirrored_repeat: {

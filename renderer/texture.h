@@ -18,7 +18,8 @@ struct Texture {
   Wrap wrap_u = Wrap::repeat, wrap_v = Wrap::repeat;
   bool nearest = false;  // the nearest texel instead of the bilinear blend
 
-  // Non-finite coordinates read texel (0, 0) instead of indexing out of the image.
+  // Any coordinate reads inside the image: non-finite ones read texel (0, 0), huge ones
+  // (1e30, 3e38) are reduced to the first tile before they are scaled to texels.
   RGB lookup(const Vec2& uv) const;
 };
 
