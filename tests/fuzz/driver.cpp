@@ -4,12 +4,14 @@
 //   fuzz_X [-max_total_time=S] [-seed=N] [-runs=N] [-timeout=S] [-max_len=B]
 //          [-artifact_prefix=DIR/] [-dict=FILE] CORPUS_DIR_OR_FILE...
 //
-// It runs every corpus entry once, then (unless -runs=0) mutated copies of them until
-// -runs inputs or -max_total_time seconds. There is no coverage feedback: it is a bounded
+// It runs every corpus entry once, then (unless -runs=0, or only files were named)
+// mutated copies of them until -runs inputs or -max_total_time seconds. There is no coverage feedback: it is a bounded
 // smoke run whose input sequence depends only on the seed and the corpus. Mutations:
 // bit flips; bytes set to 0, 0x7f, 0x80 or 0xff; random bytes; chunks inserted, deleted or
 // duplicated; two entries spliced; number tokens replaced by hostile values; runs of '['
-// or '{' at nesting points; dictionary words inserted or put into strings.
+// or '{' at nesting points; dictionary words inserted or put into strings; and, for JSON
+// seeds, values replaced (hostile numbers, other types, words, nesting), members removed
+// and elements duplicated in the parsed document.
 //
 // Findings are saved as ARTIFACT_PREFIX crash-<sha1> (a sanitizer report through its
 // death callback, an exception other than the target's own refusal, abort()) or
@@ -32,6 +34,8 @@
 #include <iterator>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) __attribute__((weak));
@@ -159,6 +163,9 @@ class Mutator {
   Bytes next() {
     Bytes input = corpus_[random_.below(corpus_.size())];
     const size_t count = 1 + random_.below(4);
+    // Half the time a JSON seed gets only structural mutations: most byte mutations make
+    // text that is not JSON, which the readers refuse before they look at any value.
+    if (random_.below(2) && mutate_json(input, count)) return input;
     for (size_t k = 0; k < count; ++k) mutate(input);
     if (input.size() > max_len_) input.resize(max_len_);
     return input;
@@ -167,6 +174,60 @@ class Mutator {
  private:
   void insert(Bytes& input, size_t at, const std::string& text) {
     input.insert(input.begin() + at, text.begin(), text.end());
+  }
+
+  // `count` changes to values of `input` parsed as JSON, written back compactly; false
+  // (input untouched) when it is not JSON. A value is replaced by a hostile number, by a
+  // value of another type, by a dictionary word, or by itself nested; a member or an
+  // element is removed or duplicated.
+  bool mutate_json(Bytes& input, size_t count) {
+    using nlohmann::json;
+    json document = json::parse(input.begin(), input.end(), nullptr, false);
+    if (document.is_discarded() || !document.is_structured()) return false;
+    for (size_t k = 0; k < count; ++k) {
+      std::vector<json*> values;  // every value, in document order
+      std::vector<json*> stack = {&document};
+      while (!stack.empty()) {
+        json* value = stack.back();
+        stack.pop_back();
+        values.push_back(value);
+        if (value->is_structured())
+          for (json& child : *value) stack.push_back(&child);
+      }
+      json& target = *values[random_.below(values.size())];
+      switch (random_.below(6)) {
+        case 0:
+          target = json::parse(kHostileNumbers[random_.below(std::size(kHostileNumbers))], nullptr, false);
+          if (target.is_discarded()) target = nullptr;  // "NaN": not JSON (the byte mutations write it)
+          break;
+        case 1: {
+          const json others[] = {nullptr, true, "", json::array(), json::object(), -0.0, 0.5};
+          target = others[random_.below(std::size(others))];
+          break;
+        }
+        case 2:
+          if (!dictionary_.empty()) target = dictionary_[random_.below(dictionary_.size())];
+          break;
+        case 3:
+          target = json::array({target});
+          break;
+        case 4:
+          if (target.is_object() && !target.empty()) {
+            auto member = target.begin();
+            std::advance(member, random_.below(target.size()));
+            target.erase(member);
+          } else if (target.is_array() && !target.empty()) {
+            target.erase(target.begin() + std::ptrdiff_t(random_.below(target.size())));
+          }
+          break;
+        case 5:
+          if (target.is_array() && !target.empty()) target.push_back(target[random_.below(target.size())]);
+          break;
+      }
+    }
+    const std::string text = document.dump(-1, ' ', false, json::error_handler_t::replace);
+    input.assign(text.begin(), text.end());
+    return true;
   }
 
   void mutate(Bytes& input) {
@@ -330,15 +391,18 @@ int main(int argc, char** argv) {
       inputs.push_back(arg);
   }
   std::vector<std::filesystem::path> files;
+  bool any_directory = false;
   for (const auto& input : inputs) {
     if (std::filesystem::is_directory(input)) {
+      any_directory = true;
       for (const auto& entry : std::filesystem::directory_iterator(input))
         if (entry.is_regular_file()) files.push_back(entry.path());
     } else if (std::filesystem::exists(input)) {
       files.push_back(input);
     }
   }
-  std::sort(files.begin(), files.end());  // the sequence must not depend on the directory order
+  std::sort(files.begin(), files.end());                        // the sequence must not depend on the directory order
+  if (!inputs.empty() && !any_directory && runs < 0) runs = 0;  // files only: run them (libFuzzer does the same)
 
   if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(on_death);
   ::signal(SIGABRT, on_abort);
