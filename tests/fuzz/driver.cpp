@@ -271,13 +271,23 @@ class Mutator {
         insert(input, begin, kHostileNumbers[random_.below(std::size(kHostileNumbers))]);
         break;
       }
-      case 8: {  // a run of '[' or '{' after a nesting point
+      case 8: {  // nesting: a number token wrapped in balanced arrays or objects, or a run of '[' or '{'
+        const size_t depth = kNestingRuns[random_.below(std::size(kNestingRuns))];
+        const auto spans = number_tokens(input);
+        if (!spans.empty() && random_.below(2)) {
+          const auto [begin, end] = spans[random_.below(spans.size())];
+          const bool arrays = random_.below(2);
+          std::string open, close;
+          for (size_t d = 0; d < depth; ++d) open += arrays ? "[" : "{\"a\":", close += arrays ? ']' : '}';
+          input.insert(input.begin() + end, close.begin(), close.end());
+          insert(input, begin, open);
+          break;
+        }
         std::vector<size_t> points;
         for (size_t i = 0; i < n; ++i)
           if (std::strchr("[{:,", input[i])) points.push_back(i + 1);
         const size_t where = points.empty() ? at : points[random_.below(points.size())];
-        insert(input, where,
-               std::string(kNestingRuns[random_.below(std::size(kNestingRuns))], random_.below(2) ? '[' : '{'));
+        insert(input, where, std::string(depth, random_.below(2) ? '[' : '{'));
         break;
       }
       case 9: {  // a dictionary word, into a string or as a new quoted one
