@@ -310,7 +310,8 @@ void write_image_seeds(const fs::path& out) {
     if (kImageExtensions[format] == ".pfm") continue;  // below: glaze writes no PFM
     save("small", format, [&](const std::string& path) { write_image(path, small); });
     save("wide", format, [&](const std::string& path) { write_image(path, wide); });
-    save("alpha", format, [&](const std::string& path) { write_image(path, small, {}, alpha); });
+    if (kImageExtensions[format] != ".hdr")  // Radiance HDR has no alpha channel
+      save("alpha", format, [&](const std::string& path) { write_image(path, small, {}, alpha); });
     save("non_finite", format, [&](const std::string& path) { write_image(path, odd); });
     save("picture", format, [&](const std::string& path) { write_picture(path, 4, 4, srgb); });
   }
