@@ -409,10 +409,15 @@ int main(int argc, char** argv) {
         if (entry.is_regular_file()) files.push_back(entry.path());
     } else if (std::filesystem::exists(input)) {
       files.push_back(input);
+    } else {
+      std::fprintf(stderr, "fuzz driver: %s does not exist\n", input.c_str());
+      return 1;
     }
   }
-  std::sort(files.begin(), files.end());                        // the sequence must not depend on the directory order
-  if (!inputs.empty() && !any_directory && runs < 0) runs = 0;  // files only: run them (libFuzzer does the same)
+  // The sequence of inputs must not depend on the directories' order. Files alone are
+  // only run (libFuzzer does the same).
+  std::sort(files.begin(), files.end());
+  if (!inputs.empty() && !any_directory && runs < 0) runs = 0;
 
   if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(on_death);
   ::signal(SIGABRT, on_abort);
