@@ -7,6 +7,7 @@
 
 #include <iostream>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,9 @@ int main(int argc, char** argv) {
     return glaze::run(std::vector<std::string>(argv + 1, argv + argc));
   } catch (const glaze::Error& error) {
     std::cerr << "glaze: error: " << error.what() << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {  // every large allocation is checked first (memory_budget.h)
+    std::cerr << "glaze: error: out of memory (glaze's estimate missed this: please report it)\n";
     return 1;
   } catch (const std::exception& error) {
     std::cerr << "glaze: internal error: " << error.what() << '\n';
