@@ -32,7 +32,26 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
     throw Error(missing + ": --mode lighting needs the object's material, from the \"material\" of " + captures.file +
                 " or --R0 x --Rd r,g,b (each in [0, 1])");
   }
-  return PolishedMaterial(R0, Rd);  // validates the ranges
+  const PolishedMaterial material(R0, Rd);  // validates the ranges
+  // With R0 = 0 a channel of Rd = 0 reflects only at grazing angles (F = (1 - mu)^5), where
+  // few samples are kept and the silhouettes' errors count most: measured, L00 off by 8%.
+  if (R0 == 0.0f) {
+    const std::string where =
+        (args.R0 || !args.Rd.empty() ? std::string("--R0 and --Rd") : captures.file) + ": R0 = 0 and Rd = 0";
+    if ((Rd == 0.0f).all())
+      throw Error(where +
+                  ": the object reflects light only at grazing angles, which does not determine the "
+                  "lighting; --mode lighting needs an object that reflects (R0 > 0 or Rd > 0)");
+    for (int c = 0; c < 3; ++c)
+      if (Rd[c] == 0.0f)
+        warn(where + " in the " +
+             (c == 0   ? "red"
+              : c == 1 ? "green"
+                       : "blue") +
+             " channel: it reflects light only at grazing angles, so that channel's L_lm is weakly determined (off "
+             "by several percent)");
+  }
+  return material;
 }
 
 }  // namespace
@@ -92,6 +111,10 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
       joint ? joint_fit->lighting
             : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
+  // Made before anything is written, so that a map the renderer refuses (a texel beyond
+  // what float carries through a render, environment.h) leaves no lighting.exr. Shared
+  // with the preview's state, which may outlive this scope's locals.
+  const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
 
   std::filesystem::create_directories(out);
   const std::string map_file = (out / "lighting.exr").string(), mask_file = (out / "lighting_coverage.png").string();
@@ -128,6 +151,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
                                       : data.diffuse_lmax > lmax ? 2
                                                                  : 1}};
   const LightingDiagnostics diagnostics = diagnose_lighting(fit, data, options, joint ? &*joint_fit : nullptr);
+  result["map_sh_disagreement"] = diagnostics.map_sh_disagreement;
   for (const std::string& warning : diagnostics.warnings) warn(warning);
   if (joint) {
     result["iterations"] = joint_fit->iterations;
@@ -159,8 +183,6 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   }
 
   stage = Clock::now();
-  // Shared with the preview's state, which may outlive this scope's locals.
-  const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
   for (SceneMaterial& m : in.scene.materials) m.R0 = material.R0(), m.Rd = material.Rd();
   show_in_preview(
       preview, in.scene, material.R0(), material.Rd(), [recovered] { return recovered; }, "recovered lighting");

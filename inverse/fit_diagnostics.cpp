@@ -10,6 +10,12 @@
 #include <cstdio>
 
 namespace glaze {
+namespace {
+
+// How far L_lm (l <= 2) may stray from the recovered map's own, as a fraction of L00.
+constexpr double kMapShTolerance = 0.1;
+
+}  // namespace
 
 MaterialDiagnostics diagnose_material(const MaterialFit& fit) {
   MaterialDiagnostics diagnostics;
@@ -83,6 +89,23 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
         "%: R0, Rd and the scale are weakly determined and capture noise can move them far (check the "
         "residual images); a known material (--mode lighting) or a glossier object pins them");
 
+  // The map's texels are the splat's where a sample sees them and the solve's L_lm
+  // elsewhere: its low bands disagree with L_lm only where the splat and the solve read
+  // the samples differently, so one of them is wrong (an L_lm the data do not pin down).
+  const int lmax = data.lmax;
+  const ShCoefficients map_sh = sh_project_latlong(fit.map, Mat3::Identity(), std::min(lmax, 2));
+  for (size_t i = 0; i < map_sh.values.size(); ++i) {
+    const RGBd L00 = fit.coefficients.values[0].abs().max(map_sh.values[0].abs()).max(1e-12);
+    diagnostics.map_sh_disagreement = std::max(
+        diagnostics.map_sh_disagreement, ((fit.coefficients.values[i] - map_sh.values[i]).abs() / L00).maxCoeff());
+  }
+  if (!(diagnostics.map_sh_disagreement <= kMapShTolerance))
+    warnings.push_back("L_lm (l <= 2) differs from the recovered map's own by " +
+                       std::to_string(std::lround(100 * diagnostics.map_sh_disagreement)) + "% of L00 (more than " +
+                       std::to_string(std::lround(100 * kMapShTolerance)) +
+                       "%): the data do not pin the lighting down, so L_lm and the map (which the re-renders use) "
+                       "cannot both be right; check the material, or add views");
+
   if (joint && !joint->passes_settled())
     diagnostics.convergence_warnings.push_back(
         "the joint fit's passes stopped at " + std::to_string(joint->passes) + " with the last still moving R0 by " +
@@ -96,7 +119,6 @@ LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData
         " rounds with R0 still moving (solver.txt lists them): R0 and Rd are the last round's; raise --max-iterations "
         "or add views");
 
-  const int lmax = data.lmax;
   char report[640];
   std::snprintf(
       report, sizeof report,

@@ -57,6 +57,11 @@ struct LightingDiagnostics {
   std::vector<std::string> convergence_warnings;
   // --mode lighting's solver report (a linear solve: what was solved, and how well posed).
   std::string linear_report;
+  // max over l <= 2 and the channels of |L_lm - the map's own L_lm| / L00 (the larger of
+  // the two L00): the re-renders use the map, fit.json's L_lm the solve, and where the data
+  // pin the lighting down both agree. Measured: 1.7-2.8% on fits whose L_lm is within
+  // 1.1% of the truth; 25% on the studio map at 128x128, whose L_lm is 12% off.
+  double map_sh_disagreement = 0.0;
 };
 // `joint`: the joint fit that `fit` is the lighting of, else null (known material).
 LightingDiagnostics diagnose_lighting(const LightingFit& fit, const LightingData& data,

@@ -436,11 +436,15 @@ MapConsistentSystem::Solution MapConsistentSystem::solve(double R0, double Rd, i
 
 namespace {
 
-// A texel's mirror estimate needs its samples' mirror weight to add up to at least one
-// sample at F = 0.01: below that the mirror carries under 1% of what they saw, and
-// (o - diffuse) / F is the diffuse model's residual amplified a hundredfold or more (a
-// matte coat, R0 near 0, seen near the normal), not the lighting.
-constexpr double kMinMirrorWeight = 1e-4;
+// A sample estimates the lighting only where its F is at least 0.01: below that the
+// mirror carries under 1% of what it saw, and (o - diffuse) / F is the diffuse model's
+// residual amplified a hundredfold or more (a matte coat, R0 near 0, seen near the
+// normal), not the lighting. The floor is per sample, not per texel: the splat's weights
+// tend to equal ones where the lighting varies within a texel (splat_samples), so that
+// one sample at F = 1e-6 beside one at F = 0.5 would put its residual times 1e6 into the
+// texel's mean (a sphere of R0 = 0 gave L00 -726 for a true 8.6 that way, through the
+// bands the first fit's map predicts for the second).
+constexpr double kMinMirrorFresnel = 0.01;
 // Lat-long texels shrink towards the poles (by sin theta) while the samples' density on
 // the sphere of directions does not, so there many texels fall between samples although
 // the directions all around them are seen: the SH reconstruction in those, as for
@@ -512,16 +516,16 @@ class SplatRows {
   }
 
   // Texel (i, j)'s mirror estimate: its own, else the mean of those in the smallest of
-  // `discs` (discs(j)) whose mirror weight suffices; none when no disc's does.
+  // `discs` (discs(j)) that holds a sample; none when no disc does.
   std::optional<RGBd> estimate_near(int i, int j, const std::vector<std::vector<Run>>& discs) const {
     RGBd s = RGBd::Zero();
     double w = 0.0;
     add_run(j, i, 1, s, w);
-    if (w >= kMinMirrorWeight) return RGBd(s / w);
+    if (w > 0.0) return RGBd(s / w);
     for (const std::vector<Run>& disc : discs) {
       s = RGBd::Zero(), w = 0.0;
       for (const Run& run : disc) add_run(run.row, i - run.columns, std::min(2 * run.columns + 1, width_), s, w);
-      if (w >= kMinMirrorWeight) return RGBd(s / w);
+      if (w > 0.0) return RGBd(s / w);
     }
     return std::nullopt;
   }
@@ -594,14 +598,14 @@ SplatRows splat_samples(const LightingData& data, float R0, const std::vector<RG
   }
   SplatRows splat(width, height);
   tbb::parallel_for(size_t(0), texels, [&](size_t t) {
-    // The texel's samples that see a mirror (F > 0), with their F.
+    // The texel's samples that see enough of the mirror (kMinMirrorFresnel), with their F.
     thread_local std::vector<std::pair<uint32_t, double>> seen;
     seen.clear();
     RGBd noise = RGBd::Zero();
     for (uint32_t i = first[t]; i < first[t + 1]; ++i) {
       const uint32_t k = order[i];
       const double F = schlick_fresnel(double(R0), double(data.mu[k]));
-      if (!(F > 0.0)) continue;
+      if (!(F >= kMinMirrorFresnel)) continue;
       seen.emplace_back(k, F);
       noise += data.noise[k].cast<double>();
     }

@@ -123,8 +123,8 @@ struct LightingFit {
   double condition = 0.0;  // of the least-squares system before the ridge (worst channel)
   double rms = 0.0;        // of the solved model's residuals (the solve map and L_lm) over samples and channels
   Image map;               // lat-long, world frame (docs/design.md §3)
-  // Per texel: 1 if samples reached it or lie within 3 degrees of its centre with mirror
-  // weight (sum F^2 >= 1e-4), 0 where it holds the SH reconstruction (lighting_fit.cpp).
+  // Per texel: 1 if samples that see the mirror (F >= 0.01) reached it or lie within 3
+  // degrees of its centre, 0 where it holds the SH reconstruction (lighting_fit.cpp).
   std::vector<float> covered;
   double covered_fraction = 0.0;
   double mirror_share = 0.0;                 // fraction of the observed light the mirror term carries

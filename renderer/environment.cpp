@@ -6,6 +6,7 @@
 #include "renderer/memory_budget.h"
 #include "renderer/procedural_environment.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
@@ -41,6 +42,21 @@ Environment::Environment(Image radiance, const EnvironmentOptions& options, std:
   if (repaired > 0) {
     warn(source_ + ": " + std::to_string(repaired) +
          " texel values were negative, NaN or infinite and are treated as 0");
+  }
+  // Float overflows beyond this in the sampling weights, the alias table's sums and the
+  // paths' throughput over their pdf, which would put Inf in the pixels. Real maps stay
+  // below 1e9 (the sun is about 1e5 in HDR photographs of the sky).
+  constexpr double kMaxRadiance = 1e20;
+  const auto brightest = std::max_element(map_.pixels.begin(), map_.pixels.end());
+  if (const double radiance = double(*brightest) * scale_; radiance > kMaxRadiance) {
+    const size_t texel = size_t(brightest - map_.pixels.begin()) / 3;
+    std::ostringstream message;
+    message << source_ << ": texel (" << texel % map_.width << ", " << texel / map_.width << ") has radiance "
+            << *brightest;
+    if (scale_ != 1.0f) message << " times the scale " << scale_ << " = " << radiance;
+    message << ", above the " << kMaxRadiance
+            << " that rendering handles without overflow: scale the map down (or lower --env-scale)";
+    throw Error(message.str());
   }
   local_to_world_ = rotation_about_y(options.rotation_degrees) * to_world;
 }

@@ -50,7 +50,8 @@ class Environment {
  public:
   // `radiance` is the map as stored (before scale). Non-finite or negative texels are
   // set to zero with a warning naming `source` and the count. Throws glaze::Error for
-  // an empty map or a to_world that is not a rotation; warns if the map is not 2:1.
+  // an empty map, a to_world that is not a rotation, or a texel whose radiance times
+  // the scale exceeds 1e20 (rendering would overflow float); warns if the map is not 2:1.
   Environment(Image radiance, const EnvironmentOptions& options, std::string source = "environment");
   // Loads any lat-long float image OpenImageIO reads.
   static Environment load(const std::string& path, const EnvironmentOptions& options = {});

@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <tuple>
 
@@ -96,10 +97,13 @@ void expect_material(const std::string& label, const Fit& fit, double R0_toleran
 void expect_lighting(const std::string& label, const Fit& fit) {
   const nlohmann::json& result = fit.result;
   const double error = result["reference_L_lm_error_l2"].get<double>();
-  std::printf("%s: L_lm (l <= 2) max error %.2f%% of L00, scale %.4f %.4f %.4f, mirror share %.1f%%, %s\n",
-              label.c_str(), 100 * error, result["reference_scale"][0].get<double>(),
-              result["reference_scale"][1].get<double>(), result["reference_scale"][2].get<double>(),
-              100 * result["mirror_share"].get<double>(), result["solve"].get<std::string>().c_str());
+  std::printf(
+      "%s: L_lm (l <= 2) max error %.2f%% of L00, scale %.4f %.4f %.4f, mirror share %.1f%%, %s, map's own L_lm "
+      "%.2f%% off\n",
+      label.c_str(), 100 * error, result["reference_scale"][0].get<double>(),
+      result["reference_scale"][1].get<double>(), result["reference_scale"][2].get<double>(),
+      100 * result["mirror_share"].get<double>(), result["solve"].get<std::string>().c_str(),
+      100 * result["map_sh_disagreement"].get<double>());
   EXPECT_EQ(result["L_lm"].size(), 25u);
   if (error >= 0.03) {
     EXPECT_NE(fit.err.find("glaze: warning:"), std::string::npos)
@@ -181,10 +185,10 @@ TEST(ExtremeCases, StudioMapLighting) {
 
 // The same at 128x128: the small source's reflection covers few pixels (100 of the
 // 2048 cells of the 64x32 solve map are covered, against 1620 at 256x256). Measured:
-// L_lm off by 11.9% of L00 (and 3.5% with all five views), with no warning; the office
-// at 128x128 gives 0.9%. This test asks for what the issue asks: within 3%, or a
-// warning. It FAILS today: glaze prints no warning (coverage and condition number are
-// reported, but nothing says the lighting is under-constrained).
+// L_lm off by 11.9% of L00 (and 3.5% with all five views); the office at 128x128 gives
+// 0.9%. This test asks for what the issue asks: within 3%, or a warning. glaze warns
+// twice: the views are reproduced to 21% only, and L_lm differs from the recovered map's
+// own by 25% of L00 (map_sh_disagreement; 1.1% L_lm error at 256x256 gives no warning).
 TEST(ExtremeCases, StudioMapLightingAtLowResolutionIsWithinBoundsOrWarns) {
   GLAZE_REQUIRE_ENVMAP(studio, "studio_small_03_1k.hdr");
   TemporaryDirectory dir;
@@ -192,6 +196,52 @@ TEST(ExtremeCases, StudioMapLightingAtLowResolutionIsWithinBoundsOrWarns) {
       captures(dir, kScenes + "white_sphere_office.gltf", "studio",
                "--integrator sh --ss 1 --res 128x128 --holdout novel_0,novel_1 --env " + studio.string());
   expect_lighting("studio map, lighting, 128x128", fit(dir, folder, "--mode lighting --pixel-footprint 1"));
+}
+
+// --mode lighting on a sphere of R0 = 0 (no mirror at normal incidence: F = (1 - mu)^5)
+// from sh captures whose diffuse term goes to l = 8, above the fit's lmax 4, so that a
+// first fit's map predicts the bands above 4 for a second. That map divided each
+// texel's light by F down to F ~ 1e-6 near the views' centres, its bands 5-8 were the
+// diffuse model's residual times 1e6, and L00 came out at -726 (Rd 1) and -185 (Rd 0.5)
+// for a true 8.57 (errors of 72,300% and 20,800% of L00), exit 0. Samples under F = 0.01
+// no longer estimate the map. Measured now: Rd 1 0.22%, Rd 0.5 0.32%. The truth: the
+// set's own lighting (reference_L_lm_error_l2, reference_scale).
+TEST(ExtremeCases, LightingFitOnR0ZeroSphere) {
+  TemporaryDirectory dir;
+  for (const float Rd : {1.0f, 0.5f}) {
+    const std::string name = "R0_0_Rd_" + std::to_string(Rd);
+    SCOPED_TRACE(name);
+    const std::string folder = captures(dir, sphere_scene_file(dir, 0.0f, RGB::Constant(Rd), name + ".gltf"), name,
+                                        "--integrator sh --lmax 8 --ss 1 --res 96x96");
+    const Fit result = fit(dir, folder, "--mode lighting");
+    expect_lighting(name + ", lighting", result);
+    EXPECT_EQ(result.result["passes"], 2);
+    EXPECT_LT(result.result["reference_L_lm_error_l2"].get<double>(), 0.03);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(result.result["reference_scale"][c].get<double>(), 1.0, 0.03);
+  }
+}
+
+// R0 = 0 with Rd = 0 reflects light only at grazing angles: the fit was 8% off in L00
+// with exit 0 and only the reproduction warning, which blames a small source. Now
+// --mode lighting refuses such a material, and warns about a channel of Rd = 0 beside
+// others that reflect (where its L_lm was off by as much).
+TEST(ExtremeCases, LightingFitRefusesAnObjectThatReflectsOnlyAtGrazingAngles) {
+  TemporaryDirectory dir;
+  const std::string black = captures(dir, sphere_scene_file(dir, 0.0f, RGB::Zero(), "black.gltf"), "black",
+                                     "--integrator sh --ss 1 --res 96x96");
+  const CommandResult refused =
+      glaze("invert-fit " + black + "/transforms.json --out " + black + "/fit --mode lighting", dir);
+  EXPECT_FALSE(refused.crashed) << refused.err;
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("transforms.json: R0 = 0 and Rd = 0"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("only at grazing angles"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(black + "/fit/fit.json"));
+
+  const std::string blue = captures(dir, sphere_scene_file(dir, 0.0f, RGB(1.0f, 0.5f, 0.0f), "yellow.gltf"), "yellow",
+                                    "--integrator sh --ss 1 --res 96x96");
+  const Fit result = fit(dir, blue, "--mode lighting");
+  EXPECT_NE(result.err.find("R0 = 0 and Rd = 0 in the blue channel"), std::string::npos) << result.err;
+  EXPECT_EQ(result.err.find("in the red channel: it reflects"), std::string::npos) << result.err;
 }
 
 // (4) 5% multiplicative noise (as in InvertFit.FivePercentNoiseKeepsEstimatesWithinOnePercent)
