@@ -3,10 +3,13 @@
 #include "renderer/error.h"
 #include "renderer/input_file.h"
 #include "renderer/json_input.h"
+#include "renderer/procedural_environment.h"
+#include "renderer/scene.h"
 #include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -127,6 +130,7 @@ struct Range {
 constexpr double kFloatMax = std::numeric_limits<float>::max();
 const Range kFinite{-kFloatMax, kFloatMax, false, false, "a finite number"};
 const Range kPositive{0.0, kFloatMax, true, false, "a finite number > 0"};
+const Range kCoordinate{-kLargestCoordinate, kLargestCoordinate, false, false, "a coordinate within +-1e15"};
 const Range kNonNegative{0.0, kFloatMax, false, false, "a finite number >= 0"};
 const Range kPixels{1.0, 65536.0, false, true, "a whole number of pixels from 1 to 65536"};
 // Counts held exactly by a float.
@@ -318,7 +322,8 @@ class TransformsReader {
            "\"transform_matrix\" must be 4 rows of 4 numbers (row-major camera-to-world), not " + json_excerpt(rows));
     Eigen::Matrix4f m;
     for (int r = 0; r < 4; ++r) {
-      const std::vector<float> row = numbers(rows[r], 4, where, "transform_matrix[" + std::to_string(r) + "]", kFinite);
+      const std::vector<float> row =
+          numbers(rows[r], 4, where, "transform_matrix[" + std::to_string(r) + "]", kCoordinate);
       for (int c = 0; c < 4; ++c) m(r, c) = row[c];
     }
     const std::string rigid =
@@ -347,7 +352,7 @@ class TransformsReader {
       fail(where, "must be " + shapes + ", not " + json_excerpt(object));
     if (gltf) return CaptureGltf{existing_file(object["gltf"], where, "gltf")};
     const std::vector<float> center =
-        numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kFinite);
+        numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kCoordinate);
     return CaptureSphere{Vec3(center[0], center[1], center[2]),
                          number(member(object, "radius", where, "the sphere's radius"), where, "radius", kPositive)};
   }
@@ -365,6 +370,13 @@ class TransformsReader {
         fail(where, "\"procedural\" must be the name of a procedural environment (a string), not " +
                         json_excerpt(entry["procedural"]));
       environment.procedural = entry["procedural"].get<std::string>();
+      const auto& names = procedural_environment_names();
+      if (std::find(names.begin(), names.end(), environment.procedural) == names.end()) {
+        std::string known;
+        for (const std::string& name : names) known += (known.empty() ? "" : ", ") + name;
+        fail(where, "\"procedural\" is " + json_excerpt(entry["procedural"]) + ", not a procedural environment (" +
+                        known + ")");
+      }
     }
     if (entry.contains("scale")) environment.options.scale = number(entry["scale"], where, "scale", kNonNegative);
     if (entry.contains("rotation"))

@@ -91,9 +91,22 @@ void fill_packet(const Ray* rays, int count, RTCRay16& packet, int* valid) {
   }
 }
 
+// Every vertex and sphere within kLargestCoordinate (scene.h), or glaze::Error.
+void check_extent(const Scene& scene) {
+  const auto inside = [](const Vec3& p) { return p.cwiseAbs().maxCoeff() <= kLargestCoordinate; };
+  for (const TriangleMesh& mesh : scene.meshes)
+    for (const Vec3& position : mesh.positions)
+      if (!inside(position))
+        throw Error(scene.path + ": a vertex of mesh '" + mesh.name + "' lies beyond +-1e15; scale the scene down");
+  for (const Sphere& sphere : scene.spheres)
+    if (!inside(sphere.center) || !(sphere.radius <= kLargestCoordinate))
+      throw Error(scene.path + ": sphere '" + sphere.name + "' reaches beyond +-1e15; scale the scene down");
+}
+
 }  // namespace
 
 RayTracer::RayTracer(const Scene& scene) : scene_(scene) {
+  check_extent(scene);
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw Error("Embree device could not be created");
   rtc_scene_ = rtcNewScene(device_);

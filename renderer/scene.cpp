@@ -34,6 +34,8 @@ const CameraSpec& Scene::camera(const std::string& name) const {
 }
 
 PinholeCamera Scene::make_camera(const CameraSpec& spec, std::optional<std::pair<int, int>> resolution) const {
+  if (!(spec.camera_to_world.translation().cwiseAbs().maxCoeff() <= kLargestCoordinate))
+    throw Error(path + ": camera " + spec.name + " lies beyond +-1e15 (or at a non-finite position); move it closer");
   std::pair<int, int> size;
   if (resolution) {
     size = *resolution;

@@ -69,6 +69,11 @@ struct EnvironmentSpec {
   int width = 1024, height = 512;  // of a procedural map
 };
 
+// The largest coordinate a scene may have. Embree refuses rays and vertices beyond about
+// 1.8e18 (by an assertion, which aborts), and float positions have lost all precision
+// long before: scenes, cameras and capture sets are checked against this when read.
+inline constexpr float kLargestCoordinate = 1e15f;
+
 struct Scene {
   std::string path;
   std::vector<SceneMaterial> materials;

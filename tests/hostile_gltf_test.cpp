@@ -301,5 +301,22 @@ TEST(HostileGltf, CameraTurnedByNegativeScale) {
   EXPECT_EQ(mirrored.find("sees none"), std::string::npos) << mirrored;
 }
 
+// Found by fuzzing: a camera at 1e38 made Embree abort on an assertion. Cameras and
+// geometry beyond 1e15 are refused, naming them.
+TEST(HostileGltf, CoordinatesBeyondWhatEmbreeTakes) {
+  testing::TemporaryDirectory dir;
+  GltfBuffer far_camera;
+  json gltf = textured_triangle(far_camera);
+  gltf["nodes"][1]["translation"] = {0, 1e38, 4};
+  expect_cli_error(dir, testing::write_gltf(dir, "camera.gltf", gltf), "lies beyond +-1e15");
+  GltfBuffer far_sphere;
+  gltf = textured_triangle(far_sphere);
+  json sphere = testing::sphere_node(1.0);
+  sphere["translation"] = {0, 0, -1e20};
+  gltf["nodes"].push_back(sphere);
+  gltf["scenes"][0]["nodes"].push_back(2);
+  expect_cli_error(dir, testing::write_gltf(dir, "sphere.gltf", gltf), "reaches beyond +-1e15");
+}
+
 }  // namespace
 }  // namespace glaze

@@ -104,6 +104,13 @@ TEST(HostileInput, WronglyTypedValuesInTransformsNameTheKey) {
       {{"renderer"}, "sh", "\"renderer\": must be"},
       {{"frames", "0", "camera_model"}, 5, "\"camera_model\" 5 is not supported"},
       {{"frames", "0", "camera"}, json::object(), "\"camera\" must be the camera's name"},
+      // Found by fuzzing: an empty name was read, then dropped by write_transforms.
+      {{"environment"}, {{"procedural", ""}}, "not a procedural environment"},
+      // Beyond what Embree takes (it aborts on such rays).
+      {{"frames", "0", "transform_matrix"},
+       {{1, 0, 0, 0}, {0, 1, 0, 1e38}, {0, 0, 1, 4}, {0, 0, 0, 1}},
+       "a coordinate within +-1e15"},
+      {{"object", "center"}, {0, 1e20, 0}, "a coordinate within +-1e15"},
   };
   for (const Case& c : cases) {
     json transforms = valid;

@@ -73,7 +73,7 @@ TEST(SilentResults, RenderUnderATexelOf1e19IsFinite) {
   const std::string env = dir.file("bright.exr");
   write_image(env, map);
   const std::string scene = quoted(testing::scenes_dir() + "red_sphere_office.gltf");
-  for (const std::string& integrator : {"path --spp 4", "sh"}) {
+  for (const char* integrator : {"path --spp 4", "sh"}) {
     SCOPED_TRACE(integrator);
     const std::string out = dir.file("render.exr");
     const CommandResult run = run_glaze("render " + scene + " --env " + quoted(env) + " --res 32x32 --integrator " +
