@@ -39,7 +39,8 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
 
 // --mode lighting: the lighting from an object of known material; --mode joint: the
 // material and the lighting together.
-int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
+int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out_folder, bool joint,
+                    FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
@@ -92,14 +93,13 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
       joint ? joint_fit->lighting
             : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
+  OutputFolder out(out_folder, "fit.json", "fit output");
 
-  std::filesystem::create_directories(out);
-  const std::string map_file = (out / "lighting.exr").string(), mask_file = (out / "lighting_coverage.png").string();
-  write_image(map_file, fit.map, {{"glaze:lmax", std::to_string(lmax)}});
+  const std::string map_file = out.write_image("lighting.exr", fit.map, {{"glaze:lmax", std::to_string(lmax)}});
   Image mask(fit.map.width, fit.map.height);
   for (size_t t = 0; t < fit.covered.size(); ++t)
     for (int c = 0; c < 3; ++c) mask.pixels[3 * t + c] = fit.covered[t];
-  write_image(mask_file, mask);
+  const std::string mask_file = out.write_image("lighting_coverage.png", mask);
   nlohmann::json L = nlohmann::json::array();
   for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
   nlohmann::json result = {{"mode", joint ? "joint" : "lighting"},
@@ -193,7 +193,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
                   result["reference_map_error"]["64x32"]["cells"].get<int>());
     std::printf("\n");
   }
-  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  std::printf("wrote %s (%.2f s)\n", out.file("fit.json").string().c_str(), seconds_since(start));
   return 0;
 }
 
