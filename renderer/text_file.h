@@ -16,7 +16,8 @@ namespace glaze {
 // glaze::Error "TARGET: could not be written (REASON)" with the system's reason.
 //
 // For tests: GLAZE_FAULT_KILL_AFTER_COMMITS=N kills the process (SIGKILL) right after
-// its N-th commit, as a crash or `kill -9` would at that point.
+// its N-th commit (every file counts, output_folder.h's marker too), as a crash or
+// `kill -9` would at that point.
 class TemporaryOutput {
  public:
   explicit TemporaryOutput(const std::filesystem::path& target);
