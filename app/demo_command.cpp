@@ -7,6 +7,7 @@
 #include "app/embedded_scene.h"
 #include "app/shared_options.h"
 #include "renderer/error.h"
+#include "renderer/json_input.h"
 #include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
@@ -39,8 +40,7 @@ int demo(const DemoCommandOptions& args) {
   std::fflush(stdout);
   command_invert_fit({captures + "/transforms.json", "--mode", "material", "--out", fit});
 
-  std::ifstream file(fit + "/fit.json");
-  const nlohmann::json result = nlohmann::json::parse(file);
+  const nlohmann::json result = read_json_file(fit + "/fit.json", "the fit's result");
   const nlohmann::json& truth = result["reference_material"];
   std::printf("\n3. recovered against true\n           recovered    true        error\n");
   std::printf("  R0       %.5f      %.5f     %+.5f\n", result["R0"].get<double>(), truth["R0"].get<double>(),

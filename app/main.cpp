@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -96,6 +97,9 @@ int main(int argc, char** argv) {
     // A file system call that glaze does not check itself: the system's word, with the path.
     const std::string path = error.path1().string();
     std::cerr << "glaze: error: " << (path.empty() ? error.what() : path + ": " + error.code().message()) << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {  // every large allocation is checked first (memory_budget.h)
+    std::cerr << "glaze: error: out of memory (glaze's estimate missed this: please report it)\n";
     return 1;
   } catch (const std::exception& error) {
     std::cerr << "glaze: internal error: " << error.what() << '\n';

@@ -262,7 +262,8 @@ CommandRun declare_render(CLI::App& app) {
   const std::string path = "path tracer (--integrator path)", sh = "sh integrator (--integrator sh)";
   const std::vector<CLI::Option*> path_options = {
       add_spp(app, args->spp, "samples per pixel (default 64; with --time-budget, a pass's: default 4)"),
-      add_real(app, "--time-budget SEC", args->time_budget, "render passes of --spp samples until SEC is spent", 0.0f),
+      add_real(app, "--time-budget SEC", args->time_budget,
+               "render passes of --spp samples until SEC is spent (at most 7 days: 604800)", 0.0f, 604800.0f),
       add_max_depth(app, args->max_depth),
       add_choice(app, "--estimator NAME", args->estimator, {"mis", "bsdf", "environment"}, "direct light estimator"),
   };

@@ -26,6 +26,7 @@
 #include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
+#include "renderer/json_input.h"
 #include "renderer/scene.h"
 #include "renderer/sh_integrator.h"
 #include "renderer/text_file.h"
@@ -36,7 +37,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -78,9 +78,9 @@ std::string scene_file(const Settings& s, const std::string& object, const Light
 }
 
 json read_json(const fs::path& path) {
-  std::ifstream file(path);
-  if (!file) throw Error(path.string() + ": missing (a step of reproduce did not write it)");
-  return json::parse(file);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(path.string() + ": missing (a step of reproduce did not write it)");
+  return read_json_file(path.string(), "a step's result");
 }
 
 std::string fixed(double value, int digits) {
@@ -765,7 +765,15 @@ int reproduce(const ReproduceCommandOptions& args) {
                   envmaps.string());
   }
   if (s.lightings.empty()) throw Error("--lighting: no lighting given");
-  Reproduction(std::move(s)).run();
+  const std::string out = s.out.string();
+  // The report reads the fits' JSON by key; a key missing or of another type means a
+  // fit.json from another glaze version, or edited, under OUT.
+  try {
+    Reproduction(std::move(s)).run();
+  } catch (const json::exception& e) {
+    throw Error(out + ": a fit.json or summary.json there lacks a value the report needs (" + e.what() +
+                "); remove the folder and run reproduce again");
+  }
   return 0;
 }
 

@@ -1,8 +1,10 @@
 #include "inverse/samples.h"
 
+#include "renderer/checked_math.h"
 #include "renderer/error.h"
 #include "renderer/image_error.h"
 #include "renderer/image_lookup.h"
+#include "renderer/memory_budget.h"
 #include "renderer/rng.h"
 
 #include <tbb/parallel_for.h>
@@ -109,11 +111,19 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
   if (!(options.min_cos >= 0.0f && options.min_cos < 1.0f)) throw Error("the grazing threshold must be in [0, 1)");
   SampleSet set;
   set.pixels = options.points == 0;
+  if (options.points > 0)
+    require_memory(saturating_mul(uint64_t(options.points), sizeof(Vec3)),
+                   "--points " + std::to_string(options.points));
   const std::vector<Vec3> points =
       options.points > 0 ? surface_points(object_scene, options.points, options.seed) : std::vector<Vec3>();
   for (size_t f = 0; f < captures.frames.size(); ++f) {
     const CaptureFrame& frame = captures.frames[f];
     const PinholeCamera& camera = frame.camera;
+    // At most one sample per pixel or point, held twice while the frame's are gathered
+    // (per row, then kept), then added to the set's (which may double as it grows).
+    const uint64_t frame_samples = points.empty() ? uint64_t(camera.width) * uint64_t(camera.height) : points.size();
+    require_memory(saturating_mul(2 * frame_samples + 2 * set.samples.size(), sizeof(Sample)),
+                   "the samples of " + frame.file_path);
     const Image image = read_image(frame.file_path);
     if (image.width != camera.width || image.height != camera.height)
       throw Error(frame.file_path + ": the image is " + std::to_string(image.width) + "x" +

@@ -2,6 +2,7 @@
 
 #include "renderer/error.h"
 #include "renderer/latlong.h"
+#include "renderer/memory_budget.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +15,11 @@ RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const Sh
   if (width < 1 || height < 1 || width > 1024 || height > 512)
     throw Error("the texture resolution must be at most 1024x512, got " + std::to_string(width) + "x" +
                 std::to_string(height));
+  // Bytes per texel: the moments (3 channels x 3x3 doubles: 216), the fit's per-group
+  // results (48) and the texture (16), with room for the solver's copies.
+  constexpr uint64_t kBytesPerTexel = 400;
+  require_memory(uint64_t(width) * uint64_t(height) * kBytesPerTexel + uint64_t(samples.size()) * 8,
+                 "the " + std::to_string(width) + "x" + std::to_string(height) + " texture fit (--texture-res)");
   std::vector<int> group(samples.size());
   std::vector<float> weights(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) {

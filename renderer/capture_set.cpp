@@ -2,6 +2,8 @@
 
 #include "renderer/error.h"
 #include "renderer/image.h"
+#include "renderer/input_file.h"
+#include "renderer/json_input.h"
 #include "renderer/output_folder.h"
 #include "renderer/text_file.h"
 
@@ -11,7 +13,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <utility>
 
@@ -155,7 +156,7 @@ float number(const json& value, const std::string& where, const std::string& key
   const double x = value.is_number() ? value.get<double>() : std::nan("");
   const bool ok = x >= range.low && x <= range.high && !(range.low_excluded && x == range.low) &&
                   !(range.integer && x != std::floor(x));
-  if (!ok) fail(where, quoted(key) + " must be " + range.text + ", not " + value.dump());
+  if (!ok) fail(where, quoted(key) + " must be " + range.text + ", not " + json_excerpt(value));
   return float(x);
 }
 
@@ -163,7 +164,7 @@ float number(const json& value, const std::string& where, const std::string& key
 std::vector<float> numbers(const json& value, size_t count, const std::string& where, const std::string& key,
                            const Range& range) {
   if (!value.is_array() || value.size() != count)
-    fail(where, quoted(key) + " must be an array of " + std::to_string(count) + " numbers, not " + value.dump());
+    fail(where, quoted(key) + " must be an array of " + std::to_string(count) + " numbers, not " + json_excerpt(value));
   std::vector<float> result;
   for (size_t i = 0; i < count; ++i)
     result.push_back(number(value[i], where, key + "[" + std::to_string(i) + "]", range));
@@ -177,26 +178,17 @@ const json& member(const json& object, const std::string& key, const std::string
 }
 
 // The transforms.json that `path` names: the file itself, or the one in a directory.
+// What kind of file it is, read_json_file checks when it opens it.
 fs::path transforms_file(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec))
     throw Error(path + ": no such file or directory; give a capture directory or its transforms.json");
   const fs::path file = fs::is_directory(path, ec) ? fs::path(path) / "transforms.json" : fs::path(path);
-  if (!fs::is_regular_file(file, ec))
+  if (!fs::exists(file, ec))
     throw Error(file.string() +
-                ": not found or not a file; a capture directory holds a transforms.json "
+                ": not found; a capture directory holds a transforms.json "
                 "(glaze render --captures writes one)");
   return file;
-}
-
-json parse(const fs::path& file) {
-  std::ifstream stream(file);
-  if (!stream) throw Error(file.string() + ": cannot be read; check its permissions");
-  try {
-    return json::parse(stream);
-  } catch (const json::exception& e) {
-    throw Error(file.string() + ": not valid JSON (" + e.what() + "); fix the file or write it again");
-  }
 }
 
 // Lens distortion coefficients as nerfstudio and OpenCV name them.
@@ -217,7 +209,7 @@ class TransformsReader {
     if (!frames.is_array() || frames.empty())
       fail(file_,
            "\"frames\" must be a non-empty array of views {\"file_path\": ..., \"transform_matrix\": ...}, not " +
-               frames.dump());
+               json_excerpt(frames));
     CaptureSet set;
     set.directory = directory_.string();
     set.file = file_;
@@ -235,7 +227,7 @@ class TransformsReader {
   // paths as they are).
   fs::path resolved_file(const json& value, const std::string& where, const std::string& key) const {
     if (!value.is_string() || value.get<std::string>().empty())
-      fail(where, quoted(key) + " must be a file name (a non-empty string), not " + value.dump());
+      fail(where, quoted(key) + " must be a file name (a non-empty string), not " + json_excerpt(value));
     return directory_ / value.get<std::string>();
   }
 
@@ -243,9 +235,14 @@ class TransformsReader {
   std::string existing_file(const json& value, const std::string& where, const std::string& key) const {
     const fs::path resolved = resolved_file(value, where, key);
     std::error_code ec;
-    if (!fs::is_regular_file(resolved, ec))
+    if (!fs::exists(resolved, ec))
       fail(where, quoted(key) + " names " + resolved.string() +
-                      ", which does not exist or is not a file; relative paths are relative to " + directory_.string());
+                      ", which does not exist; relative paths are relative to " + directory_.string());
+    try {
+      require_regular_file(resolved.string(), quoted(key));
+    } catch (const Error& e) {
+      fail(where, quoted(key) + " names something that is not a file: " + e.what());
+    }
     return resolved.string();
   }
 
@@ -261,9 +258,9 @@ class TransformsReader {
   CaptureFrame frame(const json& entry, size_t index) const {
     std::string where = file_ + ": frame " + std::to_string(index);
     if (!entry.is_object())
-      fail(where, "must be an object {\"file_path\": ..., \"transform_matrix\": ...}, not " + entry.dump());
+      fail(where, "must be an object {\"file_path\": ..., \"transform_matrix\": ...}, not " + json_excerpt(entry));
     const json& file_path = member(entry, "file_path", where, "the image's file name");
-    where += " (" + file_path.dump() + ")";
+    where += " (" + json_excerpt(file_path) + ")";
     CaptureFrame frame;
     frame.file_path = existing_file(file_path, where, "file_path");
     if (entry.contains("mask_path")) frame.mask_path = existing_file(entry.at("mask_path"), where, "mask_path");
@@ -276,7 +273,7 @@ class TransformsReader {
     PinholeCamera camera;
     if (frame.contains("camera")) {
       if (!frame.at("camera").is_string())
-        fail(where, "\"camera\" must be the camera's name (a string), not " + frame.at("camera").dump());
+        fail(where, "\"camera\" must be the camera's name (a string), not " + json_excerpt(frame.at("camera")));
       camera.name = frame.at("camera").get<std::string>();
     } else {
       char name[32];
@@ -310,11 +307,11 @@ class TransformsReader {
     if (const auto [model, model_where] = setting(frame, where, "camera_model");
         model && *model != "PINHOLE" && *model != "OPENCV")
       fail(model_where,
-           "\"camera_model\" " + model->dump() + " is not supported: glaze's camera is a pinhole" + remedy);
+           "\"camera_model\" " + json_excerpt(*model) + " is not supported: glaze's camera is a pinhole" + remedy);
     for (const char* key : kDistortion) {
       const auto [value, value_where] = setting(frame, where, key);
       if (value && number(*value, value_where, key, kFinite) != 0.0f)
-        fail(value_where, "lens distortion " + quoted(key) + " = " + value->dump() +
+        fail(value_where, "lens distortion " + quoted(key) + " = " + json_excerpt(*value) +
                               " is not supported: glaze's camera is a pinhole" + remedy);
     }
   }
@@ -324,7 +321,8 @@ class TransformsReader {
   Eigen::Affine3f pose(const json& frame, const std::string& where) const {
     const json& rows = member(frame, "transform_matrix", where, "the 4x4 row-major camera-to-world pose");
     if (!rows.is_array() || rows.size() != 4)
-      fail(where, "\"transform_matrix\" must be 4 rows of 4 numbers (row-major camera-to-world), not " + rows.dump());
+      fail(where,
+           "\"transform_matrix\" must be 4 rows of 4 numbers (row-major camera-to-world), not " + json_excerpt(rows));
     Eigen::Matrix4f m;
     for (int r = 0; r < 4; ++r) {
       const std::vector<float> row = numbers(rows[r], 4, where, "transform_matrix[" + std::to_string(r) + "]", kFinite);
@@ -334,7 +332,7 @@ class TransformsReader {
         "; the pose must be a rigid camera-to-world transform (rotation and translation, "
         "no scale, shear or mirroring)";
     if ((m.row(3) - Eigen::RowVector4f(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-4f)
-      fail(where, "the last row of \"transform_matrix\" is " + rows[3].dump() + ", not [0, 0, 0, 1]" + rigid);
+      fail(where, "the last row of \"transform_matrix\" is " + json_excerpt(rows[3]) + ", not [0, 0, 0, 1]" + rigid);
     const Mat3 rotation = m.topLeftCorner<3, 3>();
     const float deviation = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
     if (deviation > 1e-3f || rotation.determinant() <= 0.0f)
@@ -353,7 +351,7 @@ class TransformsReader {
     const bool gltf = object.is_object() && object.contains("gltf");
     const bool typed = object.is_object() && object.contains("type");
     if (gltf == typed || (typed && object["type"] != "sphere"))
-      fail(where, "must be " + shapes + ", not " + object.dump());
+      fail(where, "must be " + shapes + ", not " + json_excerpt(object));
     if (gltf) return CaptureGltf{existing_file(object["gltf"], where, "gltf")};
     const std::vector<float> center =
         numbers(member(object, "center", where, "the sphere's centre [x, y, z]"), 3, where, "center", kFinite);
@@ -366,13 +364,13 @@ class TransformsReader {
     const json& entry = root_.at("environment");
     const std::string where = file_ + ": \"environment\"";
     if (!entry.is_object() || !(entry.contains("file") || entry.contains("procedural")))
-      fail(where, "must be {\"file\": FILE, ...} or {\"procedural\": NAME, ...}, not " + entry.dump());
+      fail(where, "must be {\"file\": FILE, ...} or {\"procedural\": NAME, ...}, not " + json_excerpt(entry));
     CaptureEnvironment environment;
     if (entry.contains("file")) environment.file = existing_file(entry["file"], where, "file");
     if (entry.contains("procedural")) {
       if (!entry["procedural"].is_string())
         fail(where, "\"procedural\" must be the name of a procedural environment (a string), not " +
-                        entry["procedural"].dump());
+                        json_excerpt(entry["procedural"]));
       environment.procedural = entry["procedural"].get<std::string>();
     }
     if (entry.contains("scale")) environment.options.scale = number(entry["scale"], where, "scale", kNonNegative);
@@ -381,7 +379,7 @@ class TransformsReader {
     if (entry.contains("to_world")) {
       const json& rows = entry["to_world"];
       if (!rows.is_array() || rows.size() != 3)
-        fail(where, "\"to_world\" must be 3 rows of 3 numbers (a rotation, row-major), not " + rows.dump());
+        fail(where, "\"to_world\" must be 3 rows of 3 numbers (a rotation, row-major), not " + json_excerpt(rows));
       for (int r = 0; r < 3; ++r) {
         const std::vector<float> row = numbers(rows[r], 3, where, "to_world[" + std::to_string(r) + "]", kFinite);
         for (int c = 0; c < 3; ++c) environment.options.to_world(r, c) = row[c];
@@ -396,7 +394,7 @@ class TransformsReader {
     const std::string where = file_ + ": \"material\"";
     const std::string R0 = key(MaterialParameter::R0), Rd = key(MaterialParameter::Rd);
     if (!entry.is_object())
-      fail(where, "must be {" + quoted(R0) + ": x, " + quoted(Rd) + ": [r, g, b]}, not " + entry.dump());
+      fail(where, "must be {" + quoted(R0) + ": x, " + quoted(Rd) + ": [r, g, b]}, not " + json_excerpt(entry));
     const float specular = number(member(entry, R0, where, "the specular reflectance at normal incidence"), where, R0,
                                   parameter_range(MaterialParameter::R0));
     const std::vector<float> diffuse = numbers(member(entry, Rd, where, "the diffuse albedo [r, g, b]"), 3, where, Rd,
@@ -413,7 +411,7 @@ class TransformsReader {
     const std::string where = file_ + ": \"renderer\"";
     const std::string forms =
         "{\"integrator\": \"path\", \"spp\": N} or {\"integrator\": \"sh\", \"ss\": K, \"lmax\": L}";
-    if (!entry.is_object()) fail(where, "must be " + forms + ", not " + entry.dump());
+    if (!entry.is_object()) fail(where, "must be " + forms + ", not " + json_excerpt(entry));
     const json& integrator = member(entry, "integrator", where, "\"path\" or \"sh\"");
     CaptureRenderer renderer;
     if (integrator == "path") {
@@ -425,7 +423,7 @@ class TransformsReader {
       renderer.supersampling = int(number(supersampling, where, "ss", kCount));
       renderer.lmax = int(number(member(entry, "lmax", where, "the band of its diffuse term"), where, "lmax", kLmax));
     } else {
-      fail(where, "\"integrator\" must be \"path\" or \"sh\", not " + integrator.dump());
+      fail(where, "\"integrator\" must be \"path\" or \"sh\", not " + json_excerpt(integrator));
     }
     return renderer;
   }
@@ -471,8 +469,15 @@ void require_one_run(CaptureSet& set, const fs::path& file, const json& root) {
 CaptureSet read_transforms(const std::string& path) {
   require_finished(path);
   const fs::path file = transforms_file(path);
-  const json root = parse(file);
-  CaptureSet set = TransformsReader(file, root).read();
+  const json root = read_json_file(file.string(), "capture set (transforms.json)");
+  // Every key is type-checked above; a JSON exception here is a key that was missed.
+  CaptureSet set;
+  try {
+    set = TransformsReader(file, root).read();
+  } catch (const json::exception& e) {
+    throw Error(file.string() + ": " + e.what() +
+                " (a value of the wrong type that glaze did not check: please report it)");
+  }
   require_one_run(set, file, root);
   return set;
 }

@@ -15,7 +15,7 @@ nlohmann::json parse_json_limited(std::string_view text, const std::string& file
   };
   try {
     return json::parse(text, limit_depth);
-  } catch (const json::parse_error& error) {
+  } catch (const json::exception& error) {  // parse_error, or out_of_range for a number like 1e999
     throw Error(file + ": not valid JSON (" + error.what() + ")");
   }
 }

@@ -3,6 +3,7 @@
 #include "renderer/error.h"
 
 #include <array>
+#include <optional>
 #include <span>
 
 namespace glaze {
@@ -50,8 +51,13 @@ void PathTracer::trace_paths(const Ray* rays, int count, Pcg32& rng, RGB* out) c
   };
   std::array<Path, kLanes> paths;
   std::array<int, kLanes> active;
+  std::array<Ray, kLanes> path_rays;  // the live paths' rays, packed for one packet
   std::array<SurfaceHit, kLanes> hits;
   std::array<bool, kLanes> hit;
+  std::array<Ray, kLanes> shadow_rays;
+  std::array<int, kLanes> shadowed;  // the lane (index into active) of each shadow ray
+  std::array<bool, kLanes> blocked;
+  std::array<RGB, kLanes> unblocked;  // what each shadow ray's light adds if nothing blocks it
   std::array<EnvironmentLookup, kLanes> at;
   std::array<EnvironmentSample, kLanes> lights;
   for (int k = 0; k < count; ++k) {
@@ -63,11 +69,9 @@ void PathTracer::trace_paths(const Ray* rays, int count, Pcg32& rng, RGB* out) c
   const bool use_environment_samples = options_.estimator != DirectLightEstimator::bsdf;
 
   for (int bounce = 0; live > 0; ++bounce) {
-    for (int i = 0; i < live; ++i) {
-      const std::optional<SurfaceHit> found = tracer_.intersect(paths[active[i]].ray);
-      hit[i] = found.has_value();
-      if (found) hits[i] = *found;
-    }
+    for (int i = 0; i < live; ++i) path_rays[i] = paths[active[i]].ray;
+    tracer_.intersect(path_rays.data(), live, hits.data(), hit.data(),
+                      bounce == 0 ? RayCoherence::coherent : RayCoherence::incoherent);
 
     // Paths that escaped: every lane's texels (and sampling density) are requested
     // before the first is read.
@@ -107,25 +111,43 @@ void PathTracer::trace_paths(const Ray* rays, int count, Pcg32& rng, RGB* out) c
       }
     }
 
+    // The shading at each hit, and the shadow rays of the light samples that would add
+    // something, traced together as one packet.
+    std::array<Frame, kLanes> frames;
+    std::array<Vec3, kLanes> wos, origins;
+    std::array<std::optional<PolishedMaterial>, kLanes> materials;  // (no default constructor)
+    int shadow_count = 0;
+    for (int i = 0; i < live; ++i) {
+      const int k = active[i];
+      const SurfaceHit& h = hits[i];
+      frames[i] = Frame::from_normal(h.normal);
+      wos[i] = frames[i].to_local(-paths[k].ray.direction);
+      materials[i].emplace(scene_.material_at(h.material, h.uv, h.color));
+      origins[i] = h.position + RayTracer::ray_offset(h.position) * h.geometric_normal;
+
+      const EnvironmentSample& light = lights[i];
+      if (!use_environment_samples || !(light.pdf > 0.0f) || light.direction.dot(h.geometric_normal) <= 0.0f) continue;
+      const Vec3 wi = frames[i].to_local(light.direction);
+      const RGB f = materials[i]->eval_diffuse(wos[i], wi);
+      if (!(f > 0.0f).any()) continue;
+      const float weight = light_sample_weight(light.pdf, materials[i]->pdf_diffuse(wos[i], wi));
+      unblocked[shadow_count] = paths[k].throughput * f * (wi.z() * weight / light.pdf) * environment_.eval(at[i]);
+      shadow_rays[shadow_count] = {origins[i], light.direction};
+      shadowed[shadow_count++] = i;
+    }
+    if (shadow_count > 0) tracer_.occluded(shadow_rays.data(), shadow_count, blocked.data());
+    for (int j = 0; j < shadow_count; ++j)
+      if (!blocked[j]) out[active[shadowed[j]]] += unblocked[j];
+
     next = 0;
     for (int i = 0; i < live; ++i) {
       const int k = active[i];
       Path& path = paths[k];
       const SurfaceHit& h = hits[i];
-      const Frame frame = Frame::from_normal(h.normal);
-      const Vec3 wo = frame.to_local(-path.ray.direction);
-      const PolishedMaterial material = scene_.material_at(h.material, h.uv, h.color);
-      const Vec3 origin = h.position + RayTracer::ray_offset(h.position) * h.geometric_normal;
-
-      const EnvironmentSample& light = lights[i];
-      if (use_environment_samples && light.pdf > 0.0f && light.direction.dot(h.geometric_normal) > 0.0f) {
-        const Vec3 wi = frame.to_local(light.direction);
-        const RGB f = material.eval_diffuse(wo, wi);
-        if ((f > 0.0f).any() && !tracer_.occluded({origin, light.direction})) {
-          const float weight = light_sample_weight(light.pdf, material.pdf_diffuse(wo, wi));
-          out[k] += path.throughput * f * (wi.z() * weight / light.pdf) * environment_.eval(at[i]);
-        }
-      }
+      const Frame& frame = frames[i];
+      const Vec3& wo = wos[i];
+      const PolishedMaterial& material = *materials[i];
+      const Vec3& origin = origins[i];
 
       const float u_lobe = rng.next_float();
       const Vec2 u(rng.next_float(), rng.next_float());

@@ -4,6 +4,7 @@
 #include "renderer/latlong.h"
 #include "renderer/sphere_intersection.h"
 
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -29,34 +30,65 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
                               s.center.x() + r, s.center.y() + r, s.center.z() + r, 0.0f};
 }
 
+// The sphere callbacks take packets of N rays (rtcIntersect16 / rtcOccluded16) as well
+// as single rays (N = 1); each valid lane gets the same double-precision root.
 void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
-  if (!args->valid[0]) return;
   const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
   const Sphere& s = (*spheres)[args->primID];
-  auto* rayhit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1 only
-  RTCRay& ray = rayhit->ray;
-  const Vec3 origin(ray.org_x, ray.org_y, ray.org_z), direction(ray.dir_x, ray.dir_y, ray.dir_z);
-  const double t = sphere_hit_distance(origin, direction, s.center, s.radius, ray.tnear, ray.tfar);
-  if (std::isnan(t)) return;
-  ray.tfar = static_cast<float>(t);
-  const Vec3 n = sphere_hit_normal(s, origin, direction, t);
-  rayhit->hit.Ng_x = n.x();
-  rayhit->hit.Ng_y = n.y();
-  rayhit->hit.Ng_z = n.z();
-  rayhit->hit.u = rayhit->hit.v = 0.0f;
-  rayhit->hit.primID = args->primID;
-  rayhit->hit.geomID = args->geomID;
-  rayhit->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  const unsigned n = args->N;
+  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, n);
+  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, n);
+  for (unsigned i = 0; i < n; ++i) {
+    if (!args->valid[i]) continue;
+    const Vec3 origin(RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i), RTCRayN_org_z(ray, n, i));
+    const Vec3 direction(RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i), RTCRayN_dir_z(ray, n, i));
+    const double t =
+        sphere_hit_distance(origin, direction, s.center, s.radius, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i));
+    if (std::isnan(t)) continue;
+    RTCRayN_tfar(ray, n, i) = static_cast<float>(t);
+    const Vec3 normal = sphere_hit_normal(s, origin, direction, t);
+    RTCHitN_Ng_x(hit, n, i) = normal.x();
+    RTCHitN_Ng_y(hit, n, i) = normal.y();
+    RTCHitN_Ng_z(hit, n, i) = normal.z();
+    RTCHitN_u(hit, n, i) = RTCHitN_v(hit, n, i) = 0.0f;
+    RTCHitN_primID(hit, n, i) = args->primID;
+    RTCHitN_geomID(hit, n, i) = args->geomID;
+    RTCHitN_instID(hit, n, i, 0) = RTC_INVALID_GEOMETRY_ID;
+  }
 }
 
 void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
-  if (!args->valid[0]) return;
   const auto* spheres = static_cast<const std::vector<Sphere>*>(args->geometryUserPtr);
-  auto* ray = reinterpret_cast<RTCRay*>(args->ray);
   const Sphere& s = (*spheres)[args->primID];
-  const Vec3 origin(ray->org_x, ray->org_y, ray->org_z), direction(ray->dir_x, ray->dir_y, ray->dir_z);
-  if (!std::isnan(sphere_hit_distance(origin, direction, s.center, s.radius, ray->tnear, ray->tfar)))
-    ray->tfar = -std::numeric_limits<float>::infinity();
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (!args->valid[i]) continue;
+    const Vec3 origin(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i), RTCRayN_org_z(args->ray, n, i));
+    const Vec3 direction(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i),
+                         RTCRayN_dir_z(args->ray, n, i));
+    if (!std::isnan(sphere_hit_distance(origin, direction, s.center, s.radius, RTCRayN_tnear(args->ray, n, i),
+                                        RTCRayN_tfar(args->ray, n, i))))
+      RTCRayN_tfar(args->ray, n, i) = -std::numeric_limits<float>::infinity();
+  }
+}
+
+// Rays [0, count) in Embree's 16-wide layout; the other lanes are invalid.
+void fill_packet(const Ray* rays, int count, RTCRay16& packet, int* valid) {
+  for (int k = 0; k < kLanes; ++k) {
+    valid[k] = k < count ? -1 : 0;
+    const Ray& ray = rays[std::min(k, count - 1)];
+    packet.org_x[k] = ray.origin.x();
+    packet.org_y[k] = ray.origin.y();
+    packet.org_z[k] = ray.origin.z();
+    packet.dir_x[k] = ray.direction.x();
+    packet.dir_y[k] = ray.direction.y();
+    packet.dir_z[k] = ray.direction.z();
+    packet.tnear[k] = 0.0f;
+    packet.tfar[k] = std::numeric_limits<float>::infinity();
+    packet.mask[k] = ~0u;
+    packet.time[k] = 0.0f;
+    packet.flags[k] = 0;
+  }
 }
 
 }  // namespace
@@ -143,6 +175,11 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
     v = rayhit.hit.v;
   }
 
+  return surface_hit(ray, distance, geometry, primitive, geometric_normal, u, v, texture_coordinates);
+}
+
+SurfaceHit RayTracer::surface_hit(const Ray& ray, float distance, unsigned geometry, unsigned primitive,
+                                  const Vec3& geometric_normal, float u, float v, bool texture_coordinates) const {
   SurfaceHit hit;
   hit.distance = distance;
   if (geometry == sphere_geometry_) {
@@ -177,22 +214,72 @@ std::optional<SurfaceHit> RayTracer::intersect(const Ray& ray, float max_distanc
   return hit;
 }
 
+void RayTracer::intersect(const Ray* rays, int count, SurfaceHit* hits, bool* hit, RayCoherence coherence,
+                          bool texture_coordinates) const {
+  if (lone_sphere_) {
+    for (int k = 0; k < count; ++k) {
+      const std::optional<SurfaceHit> found =
+          intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
+      hit[k] = found.has_value();
+      if (found) hits[k] = *found;
+    }
+    return;
+  }
+  if (coherence == RayCoherence::incoherent) {
+    for (int k = 0; k < count; ++k) {
+      const std::optional<SurfaceHit> found =
+          intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
+      hit[k] = found.has_value();
+      if (found) hits[k] = *found;
+    }
+    return;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags =
+      coherence == RayCoherence::coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  alignas(64) int valid[kLanes];
+  alignas(64) RTCRayHit16 packet;
+  fill_packet(rays, count, packet.ray, valid);
+  std::fill(std::begin(packet.hit.geomID), std::end(packet.hit.geomID), RTC_INVALID_GEOMETRY_ID);
+  std::fill(std::begin(packet.hit.instID[0]), std::end(packet.hit.instID[0]), RTC_INVALID_GEOMETRY_ID);
+  rtcIntersect16(valid, rtc_scene_, &context, &packet);
+  for (int k = 0; k < count; ++k) {
+    hit[k] = packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+    if (!hit[k]) continue;
+    const Vec3 geometric_normal(packet.hit.Ng_x[k], packet.hit.Ng_y[k], packet.hit.Ng_z[k]);
+    hits[k] = surface_hit(rays[k], packet.ray.tfar[k], packet.hit.geomID[k], packet.hit.primID[k], geometric_normal,
+                          packet.hit.u[k], packet.hit.v[k], texture_coordinates);
+  }
+}
+
+void RayTracer::occluded(const Ray* rays, int count, bool* blocked) const {
+  if (lone_sphere_) {
+    for (int k = 0; k < count; ++k) blocked[k] = occluded(rays[k]);
+    return;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  alignas(64) int valid[kLanes];
+  alignas(64) RTCRay16 packet;
+  fill_packet(rays, count, packet, valid);
+  rtcOccluded16(valid, rtc_scene_, &context, &packet);
+  for (int k = 0; k < count; ++k) blocked[k] = packet.tfar[k] < 0.0f;
+}
+
 void RayTracer::intersect(const Ray* rays, int count, SurfaceHits& out, bool texture_coordinates) const {
   if (!lone_sphere_) {
-    // The rays given, one at a time; the unused lanes copy the last one's hit.
+    // One packet; the unused lanes copy the last ray's hit.
+    std::array<SurfaceHit, kLanes> hits;
+    std::array<bool, kLanes> hit;
+    intersect(rays, count, hits.data(), hit.data(), RayCoherence::coherent, texture_coordinates);
     for (int k = 0; k < kLanes; ++k) {
-      if (k >= count) {
-        out.hit[k] = out.hit[count - 1], out.normal.set(k, out.normal[count - 1]);
-        out.material[k] = out.material[count - 1], out.uv[k] = out.uv[count - 1], out.color[k] = out.color[count - 1];
-        continue;
-      }
-      const std::optional<SurfaceHit> hit =
-          intersect(rays[k], std::numeric_limits<float>::infinity(), texture_coordinates);
-      out.hit[k] = hit ? 1 : 0;
-      out.normal.set(k, hit ? hit->normal : Vec3::UnitZ());
-      out.material[k] = hit ? hit->material : 0;
-      out.uv[k] = hit ? hit->uv : Vec2::Zero();
-      out.color[k] = hit ? hit->color : RGB::Ones();
+      const int j = std::min(k, count - 1);
+      out.hit[k] = hit[j] ? 1 : 0;
+      out.normal.set(k, hit[j] ? hits[j].normal : Vec3::UnitZ());
+      out.material[k] = hit[j] ? hits[j].material : 0;
+      out.uv[k] = hit[j] ? hits[j].uv : Vec2::Zero();
+      out.color[k] = hit[j] ? hits[j].color : RGB::Ones();
     }
     return;
   }

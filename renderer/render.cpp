@@ -1,7 +1,9 @@
 #include "renderer/render.h"
 
+#include "renderer/checked_math.h"
 #include "renderer/error.h"
 #include "renderer/low_discrepancy.h"
+#include "renderer/memory_budget.h"
 
 #include <tbb/parallel_for.h>
 
@@ -24,6 +26,12 @@ constexpr int kTile = 16;
 // within their 63 bits.
 constexpr int kCameraShift = 40;
 constexpr uint64_t kCameraCount = uint64_t(1) << 22;
+
+// Peak bytes per pixel of a path-traced render: the running sums (24), the pass (24),
+// the luminance moments (16), the mean image (12) and the image as it is written.
+// Measured with /usr/bin/time -v (maximum resident size) for `glaze render` of
+// red_sphere_office at 2048x2048 against 256x256, 1 spp: 73 bytes.
+constexpr uint64_t kFilmBytesPerPixel = 80;
 
 class ProgressBar {
  public:
@@ -60,8 +68,14 @@ ProgressiveRender::ProgressiveRender(const PathTracer& tracer, const PinholeCame
       arena_(options.threads > 0 ? options.threads : tbb::task_arena::automatic) {
   if (options.spp < 1) throw Error("samples per pixel must be at least 1");
   if (camera_index >= kCameraCount) throw Error("camera index " + std::to_string(camera_index) + " is too large");
+  if (options.spp > kMaxSamplesPerPixel)
+    throw Error(std::to_string(options.spp) + " samples per pixel in one pass is more than the " +
+                std::to_string(kMaxSamplesPerPixel) + " a render takes");
   const size_t pixels = size_t(camera.width) * camera.height;
   if (pixels >= (uint64_t(1) << kCameraShift)) throw Error("the image has too many pixels to render");
+  require_memory(saturating_mul(pixels, kFilmBytesPerPixel), "the film of camera '" + camera.name + "' (" +
+                                                                 std::to_string(camera.width) + "x" +
+                                                                 std::to_string(camera.height) + ")");
   sum_.assign(pixels * 3, 0.0);
   pass_.assign(pixels * 3, 0.0);
   luminance_sum_.assign(pixels, 0.0);
@@ -73,6 +87,9 @@ int ProgressiveRender::tile_count() const {
 }
 
 bool ProgressiveRender::add_pass(const std::atomic<bool>* cancel, const std::function<void()>& tile_done) {
+  if (full())
+    throw Error("the render has " + std::to_string(spp()) + " samples per pixel; another pass would take it past " +
+                std::to_string(kMaxSamplesPerPixel));
   const int width = camera_.width, height = camera_.height, spp = options_.spp, pass = passes_;
   const int tiles_x = (width + kTile - 1) / kTile;
   std::atomic<bool> cancelled{false};
@@ -161,7 +178,10 @@ RenderResult render(const PathTracer& tracer, const PinholeCamera& camera, const
   do {
     ProgressBar progress(options.progress && options.time_budget <= 0.0, passes.tile_count());
     passes.add_pass(nullptr, [&] { progress.advance(); });
-  } while (options.time_budget > 0.0 && elapsed() < options.time_budget);
+  } while (options.time_budget > 0.0 && elapsed() < options.time_budget && !passes.full());
+  if (options.time_budget > 0.0 && passes.full() && elapsed() < options.time_budget)
+    warn("the render stopped at " + std::to_string(passes.spp()) + " samples per pixel, the most it takes (" +
+         std::to_string(kMaxSamplesPerPixel) + "), before its time budget was spent");
 
   RenderResult result;
   result.spp = passes.spp();

@@ -27,6 +27,10 @@
 
 namespace glaze {
 
+// The most samples per pixel one render takes, over all its passes: a time budget stops
+// here (with a warning) rather than let the sample count overflow.
+inline constexpr int kMaxSamplesPerPixel = 1 << 30;
+
 struct RenderOptions {
   int spp = 64;              // samples per pixel (per pass when time_budget > 0)
   double time_budget = 0.0;  // seconds; > 0: render passes of `spp` until it is spent
@@ -65,6 +69,9 @@ class ProgressiveRender {
 
   int passes() const { return passes_; }
   int spp() const { return passes_ * options_.spp; }
+  // True when another pass would take the samples per pixel past kMaxSamplesPerPixel
+  // (the pass index times spp numbers the samples in 32 bits); add_pass then throws.
+  bool full() const { return int64_t(passes_ + 1) * options_.spp > kMaxSamplesPerPixel; }
   int tile_count() const;
   // The mean of the passes so far (zero before the first); values that are not finite
   // become 0, and their number is returned in `non_finite` if given.
