@@ -18,6 +18,7 @@
 #include "renderer/render.h"
 #include "renderer/scene.h"
 #include "renderer/sh_integrator.h"
+#include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
 #include <unistd.h>
@@ -110,7 +111,7 @@ int convergence(const ConvergenceCommandOptions& args) {
   const RayTracer ray_tracer(scene);
   const std::vector<uint8_t> mask = interior_mask(ray_tracer, camera);
   const std::filesystem::path out(args.out);
-  std::filesystem::create_directories(out);
+  create_output_folder(out, "output");
 
   PathTracerOptions path_options;
   path_options.max_depth = args.max_depth;

@@ -8,6 +8,7 @@
 #include "app/shared_options.h"
 #include "renderer/error.h"
 #include "renderer/json_input.h"
+#include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -27,13 +28,9 @@ struct DemoCommandOptions {
 
 int demo(const DemoCommandOptions& args) {
   const std::filesystem::path out(args.out);
-  std::filesystem::create_directories(out);
+  create_output_folder(out, "demo");
   const std::string scene = (out / kEmbeddedSceneName).string();
-  {
-    std::ofstream file(scene);
-    file << kEmbeddedScene;
-    if (!file) throw Error(scene + ": could not be written");
-  }
+  write_text_atomically(scene, kEmbeddedScene);
   const std::string captures = (out / "captures").string(), fit = (out / "fit").string();
   std::printf("glaze demo: the red sphere in procedural:office (%s)\n\n1. path-traced captures -> %s\n", scene.c_str(),
               captures.c_str());

@@ -9,7 +9,6 @@
 #include "renderer/image_error.h"
 #include "renderer/sh.h"
 #include "renderer/sh_integrator.h"
-#include "renderer/text_file.h"
 
 #include <cstdio>
 
@@ -19,7 +18,7 @@ namespace {
 // Re-renders `frames` with the recovered material and writes them with residual images
 // (observed - predicted); returns per-view figures.
 nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& scene, const RayTracer& tracer,
-                        const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
+                        const Environment& environment, int lmax, int footprint, OutputFolder& out,
                         const std::string& prefix) {
   // The fit's own model of a pixel (its footprint), so residuals show what the fit saw.
   ShIntegratorOptions options{lmax, footprint, true, 0};
@@ -37,10 +36,8 @@ nlohmann::json rerender(const std::vector<CaptureFrame>& frames, const Scene& sc
     for (size_t i = 0; i < residual.pixels.size(); ++i) residual.pixels[i] = observed.pixels[i] - predicted.pixels[i];
     char name[64];
     std::snprintf(name, sizeof name, "%s_%03zu.exr", prefix.c_str(), f);
-    const std::string render_file = (out / ("render_" + std::string(name))).string();
-    const std::string residual_file = (out / ("residual_" + std::string(name))).string();
-    write_image(render_file, predicted, rendered.metadata);
-    write_image(residual_file, residual);
+    const std::string render_file = out.write_image("render_" + std::string(name), predicted, rendered.metadata);
+    const std::string residual_file = out.write_image("residual_" + std::string(name), residual);
     nlohmann::json view = {
         {"file", frames[f].file_path}, {"camera", camera.name}, {"render", render_file}, {"residual", residual_file}};
     const std::vector<uint8_t> mask = interior_mask(tracer, camera);
@@ -86,14 +83,14 @@ FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_sec
   return in;
 }
 
-void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report) {
-  if (!solver_report.empty()) write_text_atomically((out / "solver.txt").string(), solver_report);
-  write_text_atomically((out / "fit.json").string(), result.dump(2) + "\n");
+void write_fit(OutputFolder& out, nlohmann::json& result, const std::string& solver_report) {
+  if (!solver_report.empty()) out.write_text("solver.txt", solver_report);
+  result["run"] = out.run();
+  out.finish(result.dump(2) + "\n");
 }
 
 void write_renders(const InvertFitOptions& args, const FitInputs& in, const Scene& scene,
-                   const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
-                   nlohmann::json& result) {
+                   const Environment& environment, int lmax, int footprint, OutputFolder& out, nlohmann::json& result) {
   result["renders"] = rerender(in.captures.frames, scene, *in.tracer, environment, lmax, footprint, out, "view");
   const std::filesystem::path holdout = args.holdout_dir ? std::filesystem::path(*args.holdout_dir)
                                                          : std::filesystem::path(in.captures.directory) / "holdout";

@@ -11,6 +11,7 @@
 #include "inverse/samples.h"
 #include "renderer/capture_set.h"
 #include "renderer/environment.h"
+#include "renderer/output_folder.h"
 #include "renderer/ray_tracer.h"
 #include "renderer/scene.h"
 
@@ -81,15 +82,14 @@ struct FitInputs {
 };
 FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds);
 
-// Writes fit.json (and the solver's report) atomically.
-void write_fit(const std::filesystem::path& out, const nlohmann::json& result, const std::string& solver_report);
+// Writes the solver's report, then fit.json (with the run's id, "run") last.
+void write_fit(OutputFolder& out, nlohmann::json& result, const std::string& solver_report);
 
 // Re-renders the inputs and the held-out views (CAPTURES/holdout or --holdout-dir) with
 // `scene`'s material under `environment`, with residual images; per-view figures go to
 // result["renders"] and result["holdout"].
 void write_renders(const InvertFitOptions& args, const FitInputs& in, const Scene& scene,
-                   const Environment& environment, int lmax, int footprint, const std::filesystem::path& out,
-                   nlohmann::json& result);
+                   const Environment& environment, int lmax, int footprint, OutputFolder& out, nlohmann::json& result);
 
 // Defaults that match how glaze rendered the captures, when transforms.json says: the sh
 // integrator's K x K sub-pixel grid is exactly a footprint of K, and its lmax is the
@@ -121,6 +121,8 @@ struct FinishPreview {
 };
 
 // The modes. `preview` may be null.
+// Each writes into the folder `out` (output_folder.h, with fit.json as its final file),
+// which it locks once the fit is done, before the first file.
 int invert_material(const InvertFitOptions& args, const std::filesystem::path& out, const std::string& mode,
                     FitPreview* preview);
 int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out, bool joint, FitPreview* preview);

@@ -58,7 +58,8 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
 
 // --mode lighting: the lighting from an object of known material; --mode joint: the
 // material and the lighting together.
-int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out, bool joint, FitPreview* preview) {
+int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out_folder, bool joint,
+                    FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
   FitInputs in = prepare_inputs(args, stage_seconds);
@@ -115,14 +116,13 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   // what float carries through a render, environment.h) leaves no lighting.exr. Shared
   // with the preview's state, which may outlive this scope's locals.
   const auto recovered = std::make_shared<const Environment>(fit.map, EnvironmentOptions{}, "recovered lighting");
+  OutputFolder out(out_folder, "fit.json", "fit output");
 
-  std::filesystem::create_directories(out);
-  const std::string map_file = (out / "lighting.exr").string(), mask_file = (out / "lighting_coverage.png").string();
-  write_image(map_file, fit.map, {{"glaze:lmax", std::to_string(lmax)}});
+  const std::string map_file = out.write_image("lighting.exr", fit.map, {{"glaze:lmax", std::to_string(lmax)}});
   Image mask(fit.map.width, fit.map.height);
   for (size_t t = 0; t < fit.covered.size(); ++t)
     for (int c = 0; c < 3; ++c) mask.pixels[3 * t + c] = fit.covered[t];
-  write_image(mask_file, mask);
+  const std::string mask_file = out.write_image("lighting_coverage.png", mask);
   nlohmann::json L = nlohmann::json::array();
   for (const RGBd& v : fit.coefficients.values) L.push_back({v[0], v[1], v[2]});
   nlohmann::json result = {{"mode", joint ? "joint" : "lighting"},
@@ -215,7 +215,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
                   result["reference_map_error"]["64x32"]["cells"].get<int>());
     std::printf("\n");
   }
-  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  std::printf("wrote %s (%.2f s)\n", out.file("fit.json").string().c_str(), seconds_since(start));
   return 0;
 }
 

@@ -17,7 +17,7 @@
 namespace glaze::invert_fit {
 
 // --mode material and texture: the material under known lighting.
-int invert_material(const InvertFitOptions& args, const std::filesystem::path& out, const std::string& mode,
+int invert_material(const InvertFitOptions& args, const std::filesystem::path& out_folder, const std::string& mode,
                     FitPreview* preview) {
   const auto start = Clock::now();
   nlohmann::json stage_seconds;
@@ -59,7 +59,7 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
     };
   stage = Clock::now();
   MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
-  std::filesystem::create_directories(out);
+  OutputFolder out(out_folder, "fit.json", "fit output");
   nlohmann::json result = {
       {"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.loss}, {"pixel_footprint", footprint}};
   std::optional<RecoveredTexture> texture;
@@ -76,8 +76,8 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
     texture = fit_texture(samples.samples, terms, width, height, fit, fit_options);
     fit = texture->fit;
     result["R0"] = fit.R0;
-    const std::string file = (out / "texture.exr").string();
-    write_image(file, texture->Rd, {{"glaze:R0", std::to_string(fit.R0)}}, texture->known);
+    const std::string file =
+        out.write_image("texture.exr", texture->Rd, {{"glaze:R0", std::to_string(fit.R0)}}, texture->known);
     result["texture"] = file;
     result["texture_resolution"] = {width, height};
     result["coverage"] = texture->coverage;
@@ -147,7 +147,7 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
     if (!texture) std::printf(", Rd = %.5f %.5f %.5f", truth.Rd()[0], truth.Rd()[1], truth.Rd()[2]);
     std::printf("\n");
   }
-  std::printf("wrote %s (%.2f s)\n", (out / "fit.json").string().c_str(), seconds_since(start));
+  std::printf("wrote %s (%.2f s)\n", out.file("fit.json").string().c_str(), seconds_since(start));
   return 0;
 }
 

@@ -1,10 +1,12 @@
 // main.cpp: the `glaze` command. Thin by design: it finds the command named first, which
 // parses the rest of the command line (command_line.h) and calls the renderer and inverse
-// libraries; it turns glaze::Error into a clear message and exit status 1. `glaze help`
-// is made from the commands' own declarations.
+// libraries; it turns glaze::Error (and a file system error, with its path) into a clear
+// message and exit status 1. `glaze help` is made from the commands' own declarations.
 #include "app/commands.h"
 #include "renderer/error.h"
 
+#include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <new>
@@ -83,10 +85,18 @@ int run(const std::vector<std::string>& args) {
 }  // namespace glaze
 
 int main(int argc, char** argv) {
+  // A file over `ulimit -f` fails its write (EFBIG), which glaze reports, instead of
+  // killing the process midway.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     return glaze::run(std::vector<std::string>(argv + 1, argv + argc));
   } catch (const glaze::Error& error) {
     std::cerr << "glaze: error: " << error.what() << '\n';
+    return 1;
+  } catch (const std::filesystem::filesystem_error& error) {
+    // A file system call that glaze does not check itself: the system's word, with the path.
+    const std::string path = error.path1().string();
+    std::cerr << "glaze: error: " << (path.empty() ? error.what() : path + ": " + error.code().message()) << '\n';
     return 1;
   } catch (const std::bad_alloc&) {  // every large allocation is checked first (memory_budget.h)
     std::cerr << "glaze: error: out of memory (glaze's estimate missed this: please report it)\n";

@@ -7,8 +7,10 @@
 #include "renderer/display.h"
 #include "renderer/error.h"
 #include "renderer/integrator_registry.h"
+#include "renderer/output_folder.h"
 #include "renderer/ray_tracer.h"
 #include "renderer/scene.h"
+#include "renderer/text_file.h"
 
 #include <nlohmann/json.hpp>
 #include <unistd.h>
@@ -17,6 +19,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <iostream>
 
@@ -70,7 +73,8 @@ struct Job {
   std::optional<std::pair<int, int>> resolution;
   DisplaySettings display;  // of a picture (.png, .jpg) instead of radiance
 
-  void render_to(const CameraSpec& spec, const std::string& path) const {
+  // `folder`, if given, tags the image with its run.
+  void render_to(const CameraSpec& spec, const std::string& path, OutputFolder* folder = nullptr) const {
     const PinholeCamera camera = scene.make_camera(spec, resolution);
     if (progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
     // Each camera draws its own random streams (render.h): views of one set have
@@ -85,6 +89,7 @@ struct Job {
                      {"glaze:environment", environment_spec.source},
                      {"glaze:materials", materials_json(scene)},
                      {"glaze:seconds", std::to_string(seconds)}});
+    if (folder) folder->tag(metadata);
     if (is_picture(path)) {
       metadata["glaze:exposure"] = std::to_string(display.exposure_ev);
       metadata["glaze:tone_mapping"] = tone_mapping_name(display.tone_mapping);
@@ -101,9 +106,15 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   const Scene& scene = job.scene;
   std::set<const CameraSpec*> held_out_cameras;  // unknown names fail before any work
   for (const std::string& name : holdout) held_out_cameras.insert(&scene.camera(name));
+  if (held_out_cameras.size() == scene.cameras.size())
+    throw Error("--holdout names every camera of " + scene.path + "; leave at least one for the capture set");
   for (const CameraSpec& spec : scene.cameras) check_capture_camera(scene.make_camera(spec, job.resolution));
+  // Held-out views go to DIR/holdout, a set of its own. DIR's transforms.json, written
+  // last, says that both are whole (output_folder.h).
   const std::filesystem::path root(directory);
-  std::filesystem::create_directories(root / (holdout.empty() ? "" : "holdout"));
+  OutputFolder main_folder(root, "transforms.json", "capture set");
+  std::optional<OutputFolder> holdout_folder;
+  if (!holdout.empty()) holdout_folder.emplace(root / "holdout", "transforms.json", "held-out capture set");
 
   // The object: the analytic sphere exactly, else the scene file itself.
   CaptureSet set;
@@ -120,7 +131,8 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   const std::filesystem::path environment_file = procedural ? std::filesystem::absolute(root / "environment.exr")
                                                             : std::filesystem::absolute(job.environment_spec.source);
   if (procedural) {
-    write_image(environment_file.string(), environment.map(), {{"glaze:environment", job.environment_spec.source}});
+    main_folder.write_image(environment_file.filename().string(), environment.map(),
+                            {{"glaze:environment", job.environment_spec.source}});
     environment_entry.procedural = job.environment_spec.source.substr(std::string("procedural:").size());
   }
   // The material, when the object has exactly one.
@@ -146,22 +158,25 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
                             .lmax = sh.lmax}
           : CaptureRenderer{.integrator = CaptureRenderer::Integrator::path, .spp = job.options.path_render.spp};
 
-  for (bool held_out : {false, true}) {
+  auto render_views = [&](OutputFolder& folder, bool held_out) {
     set.frames.clear();
-    const std::filesystem::path folder = held_out ? root / "holdout" : root;
+    set.run = folder.run();
     environment_entry.file =
-        procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder)).string()
+        procedural ? std::filesystem::relative(environment_file, std::filesystem::absolute(folder.path())).string()
                    : environment_file.string();
     set.environment = environment_entry;
     for (const CameraSpec& spec : scene.cameras) {
       if (held_out_cameras.count(&spec) != size_t(held_out)) continue;
       char file[64];
       std::snprintf(file, sizeof file, "view_%03zu.exr", set.frames.size());
-      job.render_to(spec, (folder / file).string());
+      job.render_to(spec, folder.file(file).string(), &folder);
       set.frames.push_back({file, scene.make_camera(spec, job.resolution), ""});
     }
-    if (!set.frames.empty()) write_transforms(folder.string(), set);
-  }
+    return set;
+  };
+  const CaptureSet views = render_views(main_folder, false);
+  if (holdout_folder) holdout_folder->finish(transforms_json(render_views(*holdout_folder, true)));
+  main_folder.finish(transforms_json(views));
 }
 
 int render(const RenderCommandOptions& args) {
@@ -208,7 +223,7 @@ int render(const RenderCommandOptions& args) {
   }
   const std::string& out = args.out;
   if (camera_name == "all") {
-    std::filesystem::create_directories(out);
+    create_output_folder(out, "output");
     for (const CameraSpec& camera : scene.cameras)
       job.render_to(camera, (std::filesystem::path(out) / (camera.name + ".exr")).string());
   } else {

@@ -166,7 +166,7 @@ class Reproduction {
   explicit Reproduction(Settings settings) : s_(std::move(settings)) {}
 
   void run() {
-    fs::create_directories(s_.out / "figures");
+    create_output_folder(s_.out / "figures", "reproduction");
     results_["settings"] = {{"resolution", size_text(s_.resolution)},
                             {"spp", s_.spp},
                             {"texture_resolution", size_text(s_.texture_resolution)},

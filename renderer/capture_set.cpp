@@ -1,8 +1,10 @@
 #include "renderer/capture_set.h"
 
 #include "renderer/error.h"
+#include "renderer/image.h"
 #include "renderer/input_file.h"
 #include "renderer/json_input.h"
+#include "renderer/output_folder.h"
 #include "renderer/procedural_environment.h"
 #include "renderer/scene.h"
 #include "renderer/text_file.h"
@@ -79,8 +81,8 @@ void check_capture_camera(const PinholeCamera& camera) {
                 "or give the view a perspective camera");
 }
 
-void write_transforms(const std::string& directory, const CaptureSet& captures) {
-  if (captures.frames.empty()) throw Error(directory + ": a capture set needs at least one frame");
+std::string transforms_json(const CaptureSet& captures) {
+  if (captures.frames.empty()) throw Error("a capture set needs at least one frame");
   for (const CaptureFrame& frame : captures.frames) check_capture_camera(frame.camera);
   json root = json::object();
   const json shared = intrinsics(captures.frames.front().camera);
@@ -102,8 +104,13 @@ void write_transforms(const std::string& directory, const CaptureSet& captures) 
   if (captures.environment) root["environment"] = environment_json(*captures.environment);
   if (captures.material) root["material"] = material_json(*captures.material);
   if (captures.renderer) root["renderer"] = renderer_json(*captures.renderer);
+  if (!captures.run.empty()) root["run"] = captures.run;
+  return root.dump(2) + "\n";
+}
 
-  write_text_atomically((std::filesystem::path(directory) / "transforms.json").string(), root.dump(2) + "\n");
+void write_transforms(const std::string& directory, const CaptureSet& captures) {
+  if (captures.frames.empty()) throw Error(directory + ": a capture set needs at least one frame");
+  write_text_atomically((std::filesystem::path(directory) / "transforms.json").string(), transforms_json(captures));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -440,16 +447,51 @@ class TransformsReader {
 
 }  // namespace
 
+// ---------------------------------------------------------------------------------------
+// Whole sets only: a set that `glaze render --captures` did not finish, or whose images
+// come from another run than its transforms.json, is refused (output_folder.h).
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+void require_finished(const std::string& path) {
+  std::error_code ec;
+  const fs::path folder = fs::is_directory(path, ec) ? fs::path(path) : fs::path(path).parent_path();
+  if (interrupted_run(folder.empty() ? "." : folder))
+    throw Error(folder.string() + " is an incomplete capture set (a `glaze render --captures` run was interrupted, " +
+                kIncompleteMarker + " is there); render it again");
+}
+
+// The set's "run", and every frame's image of the same run.
+void require_one_run(CaptureSet& set, const fs::path& file, const json& root) {
+  if (!root.contains("run")) return;
+  if (!root.at("run").is_string()) fail(file.string(), "\"run\" must be a string (a glaze run's id)");
+  set.run = root.at("run").get<std::string>();
+  for (const CaptureFrame& frame : set.frames) {
+    const std::string run = image_attribute(frame.file_path, "glaze:run");
+    if (!run.empty() && run != set.run)
+      throw Error(frame.file_path + " was written by another run than " + file.string() +
+                  " (mixed set: a view was copied in from another set, or a run was interrupted); render the set "
+                  "again");
+  }
+}
+
+}  // namespace
+
 CaptureSet read_transforms(const std::string& path) {
+  require_finished(path);
   const fs::path file = transforms_file(path);
   const json root = read_json_file(file.string(), "capture set (transforms.json)");
   // Every key is type-checked above; a JSON exception here is a key that was missed.
+  CaptureSet set;
   try {
-    return TransformsReader(file, root).read();
+    set = TransformsReader(file, root).read();
   } catch (const json::exception& e) {
     throw Error(file.string() + ": " + e.what() +
                 " (a value of the wrong type that glaze did not check: please report it)");
   }
+  require_one_run(set, file, root);
+  return set;
 }
 
 }  // namespace glaze

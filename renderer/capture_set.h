@@ -13,7 +13,8 @@
 //     "environment": {"file": FILE and/or "procedural": NAME, "scale": s, "rotation": degrees,
 //                     "to_world": [[3x3 row-major rotation]]},                    (optional)
 //     "material": {"R0": x, "Rd": [r, g, b], "texture": FILE (optional)},       (optional)
-//     "renderer": {"integrator": "path", "spp": N} or {"integrator": "sh", "ss": K, "lmax": L} }
+//     "renderer": {"integrator": "path", "spp": N} or {"integrator": "sh", "ss": K, "lmax": L},
+//     "run": ID }                      (optional: the glaze run that wrote the set and its images)
 //
 // Relative paths are relative to the directory holding transforms.json. A per-frame
 // intrinsic overrides the top-level one. The camera is a pinhole: "camera_model" may only
@@ -81,18 +82,25 @@ struct CaptureSet {
   std::string directory;            // holding the transforms.json read; empty if built in memory
   std::string file;                 // the transforms file read (any name); empty if built in memory
   std::optional<float> saturation;  // pixel values at or above it are saturated
+  std::string run;                  // the glaze run that wrote the set ("run"; output_folder.h), or empty
 };
 
 // Throws glaze::Error unless `camera` is one a capture set can hold (a pinhole).
 void check_capture_camera(const PinholeCamera& camera);
 
-// Writes DIRECTORY/transforms.json (atomically). Intrinsics shared by every frame are
+// The text of the transforms.json of `captures`. Intrinsics shared by every frame are
 // written once at the top, others per frame.
+std::string transforms_json(const CaptureSet& captures);
+
+// Writes DIRECTORY/transforms.json (atomically).
 void write_transforms(const std::string& directory, const CaptureSet& captures);
 
 // Reads PATH, a transforms.json or a directory holding one, checking everything above
 // (files exist, poses are rigid, numbers are finite and in range, values have their
 // types). File paths come back resolved against the file's directory, ready to open.
+// Refuses a set that a glaze run did not finish (output_folder.h), and one whose images
+// were written by another run than its transforms.json (images without "glaze:run",
+// photographs, are not checked).
 // Throws glaze::Error naming the file, the frame and the key at fault.
 CaptureSet read_transforms(const std::string& path);
 

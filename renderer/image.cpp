@@ -4,6 +4,7 @@
 #include "renderer/error.h"
 #include "renderer/input_file.h"
 #include "renderer/memory_budget.h"
+#include "renderer/text_file.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -13,7 +14,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <random>
 #include <set>
 #include <system_error>
 
@@ -109,41 +109,22 @@ Image read_image_from_memory(const unsigned char* bytes, size_t size, const std:
 namespace {
 
 // Writes `pixels` (interleaved, `spec`'s size and channels, of type `format`) to a
-// temporary file beside `path` and renames it over `path` only when it is complete.
+// temporary file beside `path` (text_file.h) and renames it over `path` only when it is
+// complete.
 void write_atomically(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeDesc format, const void* pixels,
                       const std::map<std::string, std::string>& metadata) {
   const std::filesystem::path target(path);
-  std::error_code exists_error;
-  const std::filesystem::path folder = target.parent_path();
-  if (!folder.empty() && !std::filesystem::is_directory(folder, exists_error))
-    throw Error(path + ": cannot be written, the folder " + folder.string() + " does not exist (create it first)");
+  TemporaryOutput temporary(target);
   // The writer is chosen by the target's name (the temporary file keeps its extension).
   auto output = OIIO::ImageOutput::create(target.string());
   if (!output)
     throw Error(path + ": no image writer for the extension '" + target.extension().string() +
                 "' (radiance: .exr, .hdr or .pfm; a picture: .png or .jpg)");
-  std::filesystem::path temporary = target;
-  // Same directory (so rename is atomic), same extension (so the format is chosen right).
-  // (Built with append: GCC 12 gives a false -Wrestrict on a chain of operator+.)
-  std::string name = target.stem().string();
-  name.insert(0, 1, '.');
-  name.append(".tmp").append(std::to_string(std::random_device{}())).append(target.extension().string());
-  temporary.replace_filename(name);
-
   for (const auto& [key, value] : metadata) spec.attribute(key, value);
-  const bool ok = output->open(temporary.string(), spec) && output->write_image(format, pixels) && output->close();
-  if (!ok) {
-    const std::string reason = output->geterror();
-    std::error_code ec;
-    std::filesystem::remove(temporary, ec);
-    throw Error(path + ": could not be written (" + reason + ")");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, target, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    throw Error(path + ": could not be written (rename failed: " + ec.message() + ")");
-  }
+  const bool ok =
+      output->open(temporary.path().string(), spec) && output->write_image(format, pixels) && output->close();
+  if (!ok) temporary.fail(output->geterror());
+  temporary.commit();
 }
 
 }  // namespace
@@ -175,6 +156,14 @@ void write_picture(const std::string& path, int width, int height, std::span<con
   OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
   spec.attribute("oiio:ColorSpace", "sRGB");
   write_atomically(path, spec, OIIO::TypeDesc::UINT8, srgb.data(), metadata);
+}
+
+std::string image_attribute(const std::string& path, const std::string& key) {
+  require_regular_file(path, "image");
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) throw Error(path + ": cannot be read as an image (" + OIIO::geterror() + ")");
+  require_known_format(*input, path);
+  return input->spec().get_string_attribute(key);
 }
 
 }  // namespace glaze

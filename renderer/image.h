@@ -3,7 +3,8 @@
 // Reading accepts anything OpenImageIO reads (EXR, HDR, PFM, PNG, ...) and converts to
 // linear float RGB; failures become glaze::Error naming the file. Writing goes to a
 // temporary file in the same directory that is renamed over the target only when
-// complete, so a good file is never replaced by a half-written one.
+// complete (text_file.h: TemporaryOutput), so a good file is never replaced by a
+// half-written one.
 #pragma once
 
 #include "renderer/math.h"
@@ -47,6 +48,10 @@ Image read_image_from_memory(const unsigned char* bytes, size_t size, const std:
 
 // The sRGB transfer function's inverse (IEC 61966-2-1), for 8- and 16-bit images.
 float srgb_to_linear(float encoded);
+
+// The string metadata attribute `key` of the image file `path` (its header only), or ""
+// when it has none. Throws glaze::Error when the file cannot be opened as an image.
+std::string image_attribute(const std::string& path, const std::string& key);
 
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.
