@@ -137,7 +137,7 @@ struct Range {
 constexpr double kFloatMax = std::numeric_limits<float>::max();
 const Range kFinite{-kFloatMax, kFloatMax, false, false, "a finite number"};
 const Range kPositive{0.0, kFloatMax, true, false, "a finite number > 0"};
-const Range kCoordinate{-kLargestCoordinate, kLargestCoordinate, false, false, "a coordinate within +-1e15"};
+const Range kCoordinate{-kLargestCoordinate, kLargestCoordinate, false, false, "a finite number within +-1e15"};
 const Range kNonNegative{0.0, kFloatMax, false, false, "a finite number >= 0"};
 const Range kPixels{1.0, 65536.0, false, true, "a whole number of pixels from 1 to 65536"};
 // Counts held exactly by a float.

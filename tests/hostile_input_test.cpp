@@ -109,8 +109,8 @@ TEST(HostileInput, WronglyTypedValuesInTransformsNameTheKey) {
       // Beyond what Embree takes (it aborts on such rays).
       {{"frames", "0", "transform_matrix"},
        {{1, 0, 0, 0}, {0, 1, 0, 1e38}, {0, 0, 1, 4}, {0, 0, 0, 1}},
-       "a coordinate within +-1e15"},
-      {{"object", "center"}, {0, 1e20, 0}, "a coordinate within +-1e15"},
+       "a finite number within +-1e15"},
+      {{"object", "center"}, {0, 1e20, 0}, "a finite number within +-1e15"},
   };
   for (const Case& c : cases) {
     json transforms = valid;
