@@ -53,7 +53,7 @@ nlohmann::json parse_json_limited(std::string_view text, const std::string& file
     throw Error(file + ": not valid JSON (" + check.error() + ")");
   }
   try {
-    return nlohmann::json::parse(text);  // valid and shallow: the check above has read it all
+    return nlohmann::json::parse(text);               // valid and shallow: the check above has read it all
   } catch (const nlohmann::json::exception& error) {  // (the check reports these; kept as a boundary)
     throw Error(file + ": not valid JSON (" + error.what() + ")");
   }
