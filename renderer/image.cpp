@@ -32,10 +32,14 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
     throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                 ", " + std::to_string(spec.nchannels) + " channels)");
   constexpr int64_t kMaxPixels = int64_t(1) << 28;  // 16k x 16k: far beyond any map glaze needs
-  if (int64_t(spec.width) * spec.height > kMaxPixels || spec.nchannels > 64)
+  // Also a bound on each side: OpenImageIO's readers allocate per scanline (found by the
+  // fuzzer: an HDR of 2147483 x 4 asked for gigabytes).
+  constexpr int kMaxSide = 65536;
+  if (int64_t(spec.width) * spec.height > kMaxPixels || spec.width > kMaxSide || spec.height > kMaxSide ||
+      spec.nchannels > 64)
     throw Error(name + ": image is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " with " +
                 std::to_string(spec.nchannels) +
-                " channels, larger than glaze accepts (at most 2^28 pixels); "
+                " channels, larger than glaze accepts (at most 2^28 pixels, 65536 a side); "
                 "is the file corrupt?");
   const int channels = spec.nchannels;
   // Bytes per pixel: the decoded channels (4 each), the RGB image (12) and alpha (4);

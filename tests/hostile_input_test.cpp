@@ -192,6 +192,21 @@ TEST(HostileInput, OutOfMemoryIsAnErrorNotAnInternalError) {
                        "out of memory (glaze's estimate missed this: please report it)");
 }
 
+// Found by the fuzzer: a Radiance HDR header declaring 2147483 x 4 pixels (a few hundred
+// MB in all, under the memory limit) made OpenImageIO's scanline reader ask for gigabytes.
+TEST(HostileInput, ImagesWiderThan65536AreRefusedBeforeDecoding) {
+  TemporaryDirectory dir;
+  const std::string map = dir.file("wide.hdr");
+  write_text(map, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 2147483\n" + std::string(64, '\x80'));
+  try {
+    read_image(map);
+    ADD_FAILURE() << "read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("2147483x4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("65536 a side"), std::string::npos) << e.what();
+  }
+}
+
 TEST(HostileInput, LargeMapsAreRefusedBeforeDecodingAndSampling) {
   TemporaryDirectory dir;
   const std::string map = dir.file("map.exr");
