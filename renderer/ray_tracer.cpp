@@ -242,8 +242,7 @@ void RayTracer::intersect(const Ray* rays, int count, SurfaceHit* hits, bool* hi
   }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  context.flags =
-      coherence == RayCoherence::coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // (scattered rays went one at a time above)
   alignas(64) int valid[kLanes];
   alignas(64) RTCRayHit16 packet;
   fill_packet(rays, count, packet.ray, valid);
