@@ -72,41 +72,41 @@ TEST(HdrMerge, RecoversAFilmResponseAndMergesWithinOnePercent) {
   const SyntheticScene scene = testing::synthetic_scene(256, 192);
   const BracketPhotos photos = synthetic_bracket(scene);
   const ResponseSamples samples = sample_bracket(photos);
-  {
-    const CameraResponse response = recover_response({&samples, 1});
-    // The scene spans codes ~19 to ~239 in red; the other channels stop lower because a
-    // pixel leaves the exposures in which its red saturates.
-    for (int c = 0; c < 3; ++c) {
-      EXPECT_LE(response.well_constrained[c][0], 25) << c;
-      EXPECT_GE(response.well_constrained[c][1], 190) << c;
-    }
-    EXPECT_GE(response.well_constrained[0][1], 235);
-    const double curve = response_error(response);
-    EXPECT_LT(curve, 0.02);
-
-    CapturedWarnings warnings;
-    const HdrMerge merge = merge_bracket(photos, response);
-    const double hdr = merge_error(merge, scene);
-    EXPECT_LT(hdr, 0.01);
-    std::printf("response within %.3f%%, merge median error %.3f%%\n", 100 * curve, 100 * hdr);
-
-    // The hot spot, and nothing else, is saturated in every exposure: alpha 0, counted.
-    size_t hot = 0;
-    for (size_t p = 0; p < scene.hot.size(); ++p) {
-      hot += scene.hot[p];
-      ASSERT_EQ(merge.alpha[p], scene.hot[p] ? 0.0f : 1.0f) << p;
-    }
-    EXPECT_EQ(merge.saturated, hot);
-    EXPECT_EQ(merge.underexposed, 0u);
-    // Its value is a lower bound: below the truth, from the shortest exposure.
-    for (size_t p = 0; p < scene.hot.size(); ++p)
-      if (scene.hot[p]) ASSERT_LT(merge.radiance.pixels[p * 3] * testing::film_curve_inverse(128 / 255.0), 5e4);
-    warn_coverage(photos.bracket, merge);
-    ASSERT_EQ(warnings.messages.size(), 1u);
-    EXPECT_TRUE(contains(warnings.messages[0], "saturated in every exposure")) << warnings.messages[0];
-    EXPECT_TRUE(contains(warnings.messages[0], "exposure_0.png")) << warnings.messages[0];
-    EXPECT_TRUE(contains(warnings.messages[0], "shorter")) << warnings.messages[0];
+  const CameraResponse response = recover_response({&samples, 1});
+  // The scene spans codes ~19 to ~239 in red; the other channels stop lower because a
+  // pixel leaves the exposures in which its red saturates.
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_LE(response.well_constrained[c][0], 25) << c;
+    EXPECT_GE(response.well_constrained[c][1], 190) << c;
   }
+  EXPECT_GE(response.well_constrained[0][1], 235);
+  const double curve = response_error(response);
+  EXPECT_LT(curve, 0.02);
+
+  CapturedWarnings warnings;
+  const HdrMerge merge = merge_bracket(photos, response);
+  const double hdr = merge_error(merge, scene);
+  EXPECT_LT(hdr, 0.01);
+  std::printf("response within %.3f%%, merge median error %.3f%%\n", 100 * curve, 100 * hdr);
+
+  // The hot spot, and nothing else, is saturated in every exposure: alpha 0, counted.
+  size_t hot = 0;
+  for (size_t p = 0; p < scene.hot.size(); ++p) {
+    hot += scene.hot[p];
+    ASSERT_EQ(merge.alpha[p], scene.hot[p] ? 0.0f : 1.0f) << p;
+  }
+  EXPECT_EQ(merge.saturated, hot);
+  EXPECT_EQ(merge.underexposed, 0u);
+  // Its value is a lower bound: below the truth, from the shortest exposure.
+  for (size_t p = 0; p < scene.hot.size(); ++p)
+    if (scene.hot[p]) {
+      ASSERT_LT(merge.radiance.pixels[p * 3] * testing::film_curve_inverse(128 / 255.0), 5e4);
+    }
+  warn_coverage(photos.bracket, merge);
+  ASSERT_EQ(warnings.messages.size(), 1u);
+  EXPECT_TRUE(contains(warnings.messages[0], "saturated in every exposure")) << warnings.messages[0];
+  EXPECT_TRUE(contains(warnings.messages[0], "exposure_0.png")) << warnings.messages[0];
+  EXPECT_TRUE(contains(warnings.messages[0], "shorter")) << warnings.messages[0];
 }
 
 TEST(HdrMerge, RecoversTheResponseJointlyFromBracketsOfDifferentExposures) {
@@ -115,7 +115,7 @@ TEST(HdrMerge, RecoversTheResponseJointlyFromBracketsOfDifferentExposures) {
   BracketPhotos first = synthetic_bracket(scene), second;
   second.bracket.folder = "second";
   for (int j = 0; j < kExposures; ++j) {
-    second.bracket.exposures.push_back({"b" + std::to_string(j) + ".png", 2 * exposure_time(j)});
+    second.bracket.exposures.push_back({std::string("b") + std::to_string(j) + ".png", 2 * exposure_time(j)});
     second.photos.push_back(testing::photograph(scene, 2 * exposure_time(j), 11));
   }
   const std::vector<ResponseSamples> samples = {sample_bracket(first), sample_bracket(second)};
@@ -191,7 +191,7 @@ TEST(HdrMerge, ExposuresComeFromExif) {
   const Bracket bracket = find_bracket(dir.path());
   ASSERT_EQ(bracket.exposures.size(), 3u);
   EXPECT_EQ(bracket.exposures[0].file.filename(), "c.jpg");
-  // EXIF stores rationals: OpenImageIO writes 1/60 as 0.016666.
+  // EXIF stores rationals: OpenImageIO writes 1/60 as 0.016666 and 0.01 as 0.0099990.
   EXPECT_NEAR(bracket.exposures[0].exposure, 1.0 / 1000, 1e-4 / 1000);
   EXPECT_NEAR(bracket.exposures[1].exposure, 1.0 / 250, 1e-4 / 250);
   EXPECT_NEAR(bracket.exposures[2].exposure, 1.0 / 60, 1e-4 / 60);
@@ -202,8 +202,8 @@ TEST(HdrMerge, ExposuresComeFromExif) {
   testing::write_photo(varying.file("2.jpg"), photo, {{"ExposureTime", 0.01f}, {"FNumber", 8.0f}}, 800);
   const Bracket by_aperture = find_bracket(varying.path());
   EXPECT_EQ(by_aperture.exposures[0].file.filename(), "1.jpg");
-  EXPECT_NEAR(by_aperture.exposures[0].exposure, 0.01, 1e-6);
-  EXPECT_NEAR(by_aperture.exposures[1].exposure, 0.01 * 8 * (4.0 * 4) / (8 * 8), 1e-6);
+  EXPECT_NEAR(by_aperture.exposures[0].exposure, 0.01, 1e-3 * 0.01);
+  EXPECT_NEAR(by_aperture.exposures[1].exposure, 0.01 * 8 * (4.0 * 4) / (8 * 8), 1e-3 * 0.02);
   // A PNG's codes are read as written, not sRGB-decoded.
   testing::write_photo(varying.file("codes.png"), photo);
   EXPECT_EQ(read_photo_codes(varying.file("codes.png")).codes, photo.codes);
@@ -324,7 +324,7 @@ TEST(HdrMerge, CommandMergesAShoot) {
     // EXIF exposure times 4.096 times the true ones (OpenImageIO 2.4 writes 1/4096 s as
     // inf): the same bracket in other units.
     for (int j = 0; j < kExposures; ++j)
-      testing::write_photo((dir.path() / "shoot" / view / ("e" + std::to_string(j) + ".jpg")).string(),
+      testing::write_photo((dir.path() / "shoot" / view / (std::string("e") + std::to_string(j) + ".jpg")).string(),
                            testing::photograph(scene, exposure_time(j), j),
                            {{"ExposureTime", float(0.001 * std::pow(4.0, j))}});
   }
