@@ -153,7 +153,8 @@ CommandRun declare_hdr_merge(CLI::App& app) {
   add_text(app, "FOLDER", args->folders,
            "a bracket's folder (its photos but board.*; exposures.json or EXIF exposure times), or a shoot "
            "holding view_*/ and probe_*/ brackets")
-      ->required();
+      ->required()
+      ->default_str("");
   add_text(app, "--out DIR", args->out, "the output folder: NAME.exr per bracket, response.json/png, hdr_merge.json")
       ->required();
   add_text(app, "--response FILE.json", args->response, "a response.json to use instead of recovering one");

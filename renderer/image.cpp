@@ -136,20 +136,25 @@ PhotoCodes read_photo_codes(const std::string& path) {
   const int channels = spec.nchannels;
   // The decoded channels (2 bytes each) and the RGB codes (6).
   require_sane_size(spec, path, 2 * uint64_t(std::max(channels, 0)) + 6);
-  std::vector<uint16_t> stored(size_t(spec.width) * spec.height * channels);
   PhotoCodes photo;
   photo.bits = type == OIIO::TypeDesc::UINT8 ? 8 : 16;
   photo.linear = photo.bits == 16 || raw;
-  // Read as 16-bit in both cases: OIIO widens 8-bit code c to c * 257, undone below.
-  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT16, stored.data()))
-    throw Error(path + ": pixel data could not be read, the file is probably truncated or corrupt (" +
-                input->geterror() + ")");
   photo.width = spec.width, photo.height = spec.height;
   const size_t count = size_t(spec.width) * spec.height;
   photo.codes.resize(count * 3);
-  const uint16_t divisor = photo.bits == 8 ? 257 : 1;
-  for (size_t i = 0; i < count; ++i)
-    for (int c = 0; c < 3; ++c) photo.codes[i * 3 + c] = stored[i * channels + (channels >= 3 ? c : 0)] / divisor;
+  // Read in the stored type (no conversion by OIIO), then the RGB channels copied out.
+  auto read_as = [&]<typename Code>(OIIO::TypeDesc type_desc) {
+    std::vector<Code> stored(count * channels);
+    if (!input->read_image(0, 0, 0, channels, type_desc, stored.data()))
+      throw Error(path + ": pixel data could not be read, the file is probably truncated or corrupt (" +
+                  input->geterror() + ")");
+    for (size_t i = 0; i < count; ++i)
+      for (int c = 0; c < 3; ++c) photo.codes[i * 3 + c] = stored[i * channels + (channels >= 3 ? c : 0)];
+  };
+  if (photo.bits == 8)
+    read_as.template operator()<uint8_t>(OIIO::TypeDesc::UINT8);
+  else
+    read_as.template operator()<uint16_t>(OIIO::TypeDesc::UINT16);
   return photo;
 }
 
