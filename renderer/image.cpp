@@ -10,9 +10,11 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <algorithm>
 #include <cmath>
-
 #include <cstdio>
+#include <cstdlib>
+#include <memory>
 #include <filesystem>
 #include <set>
 #include <system_error>
@@ -25,9 +27,9 @@ float srgb_to_linear(float encoded) {
 
 namespace {
 
-// Reads an opened image as linear RGB; `name` is used in messages.
-Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float>* alpha) {
-  const OIIO::ImageSpec& spec = input.spec();
+// Refuses an image with no pixels or more than glaze accepts, and checks that decoding
+// it (`bytes_per_pixel`) fits the memory budget.
+void require_sane_size(const OIIO::ImageSpec& spec, const std::string& name, uint64_t bytes_per_pixel) {
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
     throw Error(name + ": image has no pixels (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                 ", " + std::to_string(spec.nchannels) + " channels)");
@@ -41,11 +43,17 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
                 std::to_string(spec.nchannels) +
                 " channels, larger than glaze accepts (at most 2^28 pixels, 65536 a side); "
                 "is the file corrupt?");
+  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
+  require_memory(saturating_mul(pixels, bytes_per_pixel), "decoding " + name);
+}
+
+// Reads an opened image as linear RGB; `name` is used in messages.
+Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float>* alpha) {
+  const OIIO::ImageSpec& spec = input.spec();
   const int channels = spec.nchannels;
   // Bytes per pixel: the decoded channels (4 each), the RGB image (12) and alpha (4);
   // `glaze sh` of a 4096x2048 RGB EXR against 512x256 peaks at 24 (/usr/bin/time -v).
-  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
-  require_memory(saturating_mul(pixels, 4 * uint64_t(channels) + 16), "decoding " + name);
+  require_sane_size(spec, name, 4 * uint64_t(std::max(channels, 0)) + 16);
   std::vector<float> raw(size_t(spec.width) * spec.height * channels);
   if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, raw.data())) {
     throw Error(name + ": pixel data could not be read, the file is probably truncated or corrupt (" +
@@ -76,13 +84,34 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
   return image;
 }
 
+// Which of OpenImageIO's readers glaze lets see a file: those of the formats it documents,
+// plus camera raw (LibRaw) for photographs only.
+enum class Readers { kGlaze, kPhotographs };
+
 // OIIO picks a reader by the file's extension, else by trying every plugin it has; glaze
 // decodes only the formats it documents, so that no other plugin sees a hostile file.
-void require_known_format(const OIIO::ImageInput& input, const std::string& name) {
+void require_known_format(const OIIO::ImageInput& input, const std::string& name, Readers readers = Readers::kGlaze) {
   static const std::set<std::string> kFormats = {"openexr", "hdr", "pnm", "png", "jpeg", "tiff"};
-  if (!kFormats.count(input.format_name()))
-    throw Error(name + ": is a " + std::string(input.format_name()) +
-                " image; glaze reads EXR, HDR, PFM, PNG, JPEG and TIFF images: convert it to one of those");
+  const std::string format = input.format_name();
+  if (kFormats.count(format) || (readers == Readers::kPhotographs && format == "raw")) return;
+  throw Error(name + ": is a " + format + " image; glaze reads EXR, HDR, PFM, PNG, JPEG and TIFF images" +
+              (readers == Readers::kPhotographs ? " and camera raw" : "") + ": convert it to one of those");
+}
+
+// Opens the regular file `path` with the readers allowed; `expected` ends the message
+// when it is no image. Camera raw is demosaicked to linear sRGB primaries, white
+// balanced as the camera recorded, without OIIO's automatic brightening.
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, Readers readers, const std::string& expected) {
+  // A FIFO or a device would block OIIO's open or never end.
+  require_regular_file(path, "image");
+  OIIO::ImageSpec config;
+  config.attribute("raw:ColorSpace", "sRGB-linear");
+  config.attribute("raw:auto_bright", 0);
+  config.attribute("raw:use_camera_wb", 1);
+  auto input = OIIO::ImageInput::open(path, readers == Readers::kPhotographs ? &config : nullptr);
+  if (!input) throw Error(path + ": cannot be read as an image (" + OIIO::geterror() + ")" + expected);
+  require_known_format(*input, path, readers);
+  return input;
 }
 
 }  // namespace
@@ -91,15 +120,65 @@ Image read_image(const std::string& path, std::vector<float>* alpha) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw Error(path + ": no such file (check the path; environment maps are lat-long EXR, HDR or PFM images)");
-  // A FIFO or a device would block OIIO's open or never end.
-  require_regular_file(path, "image");
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) {
-    throw Error(path + ": cannot be read as an image (" + OIIO::geterror() +
-                "); expected a float image such as EXR, HDR or PFM");
-  }
-  require_known_format(*input, path);
+  auto input = open_input(path, Readers::kGlaze, "; expected a float image such as EXR, HDR or PFM");
   return decode(*input, path, alpha);
+}
+
+PhotoCodes read_photo_codes(const std::string& path) {
+  auto input = open_input(path, Readers::kPhotographs, "; expected a photograph: JPEG, PNG, TIFF or camera raw");
+  const OIIO::ImageSpec& spec = input->spec();
+  const OIIO::TypeDesc::BASETYPE type = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
+  const bool raw = std::string(input->format_name()) == "raw";
+  if (type != OIIO::TypeDesc::UINT8 && type != OIIO::TypeDesc::UINT16)
+    throw Error(path + ": is a " + std::string(spec.format.c_str()) +
+                " image; a bracket holds 8-bit JPEG/PNG/TIFF, 16-bit PNG/TIFF or camera raw photographs (an "
+                "image that is HDR already needs no merge)");
+  const int channels = spec.nchannels;
+  // The decoded channels (2 bytes each) and the RGB codes (6).
+  require_sane_size(spec, path, 2 * uint64_t(std::max(channels, 0)) + 6);
+  PhotoCodes photo;
+  photo.bits = type == OIIO::TypeDesc::UINT8 ? 8 : 16;
+  photo.linear = photo.bits == 16 || raw;
+  photo.width = spec.width, photo.height = spec.height;
+  const size_t count = size_t(spec.width) * spec.height;
+  photo.codes.resize(count * 3);
+  // Read in the stored type (no conversion by OIIO), then the RGB channels copied out.
+  auto read_as = [&]<typename Code>(OIIO::TypeDesc type_desc) {
+    std::vector<Code> stored(count * channels);
+    if (!input->read_image(0, 0, 0, channels, type_desc, stored.data()))
+      throw Error(path + ": pixel data could not be read, the file is probably truncated or corrupt (" +
+                  input->geterror() + ")");
+    for (size_t i = 0; i < count; ++i)
+      for (int c = 0; c < 3; ++c) photo.codes[i * 3 + c] = stored[i * channels + (channels >= 3 ? c : 0)];
+  };
+  if (photo.bits == 8)
+    read_as.template operator()<uint8_t>(OIIO::TypeDesc::UINT8);
+  else
+    read_as.template operator()<uint16_t>(OIIO::TypeDesc::UINT16);
+  return photo;
+}
+
+std::optional<double> photo_number_attribute(const std::string& path, const std::string& key) {
+  auto input = open_input(path, Readers::kPhotographs, "; expected a photograph: JPEG, PNG, TIFF or camera raw");
+  const OIIO::ParamValue* value = input->spec().find_attribute(key);
+  if (!value) return std::nullopt;
+  if (value->type() == OIIO::TypeString) {  // "1/60", "0.5"
+    const std::string text = value->get_string();
+    char* end = nullptr;
+    double number = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() && *end == '/') {
+      const char* denominator = end + 1;
+      number /= std::strtod(denominator, &end);
+    }
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(number)) return std::nullopt;
+    return number;
+  }
+  if (value->type() == OIIO::TypeRational) {
+    const int* parts = static_cast<const int*>(value->data());
+    return parts[1] != 0 ? std::optional<double>(double(parts[0]) / parts[1]) : std::nullopt;
+  }
+  const double number = value->get_float(NAN);
+  return std::isfinite(number) ? std::optional<double>(number) : std::nullopt;
 }
 
 Image read_image_from_memory(const unsigned char* bytes, size_t size, const std::string& name) {
@@ -163,11 +242,7 @@ void write_picture(const std::string& path, int width, int height, std::span<con
 }
 
 std::string image_attribute(const std::string& path, const std::string& key) {
-  require_regular_file(path, "image");
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) throw Error(path + ": cannot be read as an image (" + OIIO::geterror() + ")");
-  require_known_format(*input, path);
-  return input->spec().get_string_attribute(key);
+  return open_input(path, Readers::kGlaze, "")->spec().get_string_attribute(key);
 }
 
 }  // namespace glaze

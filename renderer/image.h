@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -52,6 +53,29 @@ float srgb_to_linear(float encoded);
 // The string metadata attribute `key` of the image file `path` (its header only), or ""
 // when it has none. Throws glaze::Error when the file cannot be opened as an image.
 std::string image_attribute(const std::string& path, const std::string& key);
+
+// A photograph's pixels as the camera stored them, for the HDR merge (inverse/photos/),
+// which recovers the response of 8-bit images itself and so needs their codes, not
+// read_image's sRGB decoding.
+struct PhotoCodes {
+  int width = 0;
+  int height = 0;
+  int bits = 8;                 // 8 or 16: codes run 0 .. 2^bits - 1
+  bool linear = false;          // codes proportional to exposure (16-bit TIFF/PNG, camera raw)
+  std::vector<uint16_t> codes;  // width * height * 3, row-major (grey replicated)
+};
+
+// Reads `path` as PhotoCodes: 8-bit JPEG/PNG/TIFF (response unknown), 16-bit PNG/TIFF
+// and camera raw (through OpenImageIO's LibRaw reader, demosaicked to linear sRGB
+// primaries), both linear. Unlike read_image it accepts camera raw, and refuses float
+// images (already HDR). Throws glaze::Error naming the file.
+PhotoCodes read_photo_codes(const std::string& path);
+
+// The numeric metadata attribute `key` of the photograph `path` (its header only: EXIF
+// "ExposureTime", "FNumber", ...), or nothing when it has none. A text value ("1/60")
+// is parsed. Camera raw is accepted as by read_photo_codes. Throws glaze::Error when
+// the file cannot be opened as an image.
+std::optional<double> photo_number_attribute(const std::string& path, const std::string& key);
 
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.

@@ -1,8 +1,12 @@
 // Benchmarks of the shared core (Google Benchmark). Run: build/tests/glaze_bench
 // Reported in docs/performance.md: SH projection of a 1024x512 map at lmax 4, 10M environment
 // samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline, the
-// path tracer on meshes (the still life, a 25k-triangle sphere).
+// path tracer on meshes (the still life, a 25k-triangle sphere), the HDR merge of a
+// seven-exposure 24-megapixel bracket (decoding, alignment check and merge apart).
 #include "gltf_builder.h"
+#include "inverse/photos/bracket_alignment.h"
+#include "inverse/photos/hdr_merge.h"
+#include "photo_bracket.h"
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"
 #include "inverse/material_fit.h"
@@ -26,6 +30,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 namespace glaze {
 namespace {
@@ -341,6 +346,71 @@ void BM_JointFit3x512(benchmark::State& state) { joint_fit_benchmark(state, true
 BENCHMARK(BM_JointFit3x512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 void BM_JointFitPasses3x512(benchmark::State& state) { joint_fit_benchmark(state, false); }
 BENCHMARK(BM_JointFitPasses3x512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// A seven-exposure bracket of 6000x4000 JPEGs (the synthetic scene of the HDR tests,
+// 1/4096 s to 1 s), written once to a temporary folder that is removed at exit.
+struct BracketFiles {
+  std::filesystem::path folder;
+  Bracket bracket;
+  BracketFiles() {
+    folder = std::filesystem::temp_directory_path() / ("glaze_bench_bracket_" + std::to_string(getpid()));
+    std::filesystem::create_directories(folder);
+    const testing::SyntheticScene scene = testing::synthetic_scene(6000, 4000);
+    for (int j = 0; j < 7; ++j) {
+      const double seconds = std::pow(4.0, j - 6);
+      const auto file = folder / ("exposure_" + std::to_string(j) + ".jpg");
+      // EXIF times 4.096 times the true ones (OpenImageIO 2.4 writes 1/4096 s as inf).
+      testing::write_photo(file.string(), testing::photograph(scene, seconds, 1, /*noise=*/false),
+                           {{"ExposureTime", float(0.001 * std::pow(4.0, j))}});
+    }
+    bracket = find_bracket(folder);
+  }
+  ~BracketFiles() {
+    std::error_code ec;
+    std::filesystem::remove_all(folder, ec);
+  }
+};
+const BracketFiles& bracket_files() {
+  static const BracketFiles files;
+  return files;
+}
+const BracketPhotos& decoded_bracket() {
+  static const BracketPhotos photos = read_bracket(bracket_files().bracket);
+  return photos;
+}
+
+void BM_DecodeBracket24MP(benchmark::State& state) {
+  const Bracket& bracket = bracket_files().bracket;
+  for (auto _ : state) benchmark::DoNotOptimize(read_bracket(bracket));
+  state.SetItemsProcessed(state.iterations() * 7 * 24'000'000);
+}
+BENCHMARK(BM_DecodeBracket24MP)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_ResponseFromBracket24MP(benchmark::State& state) {
+  const BracketPhotos& photos = decoded_bracket();
+  for (auto _ : state) {
+    const ResponseSamples samples = sample_bracket(photos);
+    benchmark::DoNotOptimize(recover_response({&samples, 1}));
+  }
+}
+BENCHMARK(BM_ResponseFromBracket24MP)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_AlignBracket24MP(benchmark::State& state) {
+  const BracketPhotos& photos = decoded_bracket();
+  const ResponseSamples samples = sample_bracket(photos);
+  const CameraResponse response = recover_response({&samples, 1});
+  for (auto _ : state) benchmark::DoNotOptimize(bracket_shifts(photos, response));
+}
+BENCHMARK(BM_AlignBracket24MP)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_MergeBracket24MP(benchmark::State& state) {
+  const BracketPhotos& photos = decoded_bracket();
+  const ResponseSamples samples = sample_bracket(photos);
+  const CameraResponse response = recover_response({&samples, 1});
+  for (auto _ : state) benchmark::DoNotOptimize(merge_bracket(photos, response));
+  state.SetItemsProcessed(state.iterations() * 7 * 24'000'000);
+}
+BENCHMARK(BM_MergeBracket24MP)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace glaze

@@ -1,0 +1,87 @@
+// photo_bracket.h: exposure brackets synthesised for the HDR merge's tests and benchmark:
+// a known linear scene, photographed at known exposures through a known tone curve that
+// is not a power law, with shot and read noise and 8-bit quantisation.
+#pragma once
+
+#include "inverse/photos/bracket.h"
+#include "renderer/error.h"
+#include "renderer/rng.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace glaze::testing {
+
+// A film-like tone curve, code / 255 for an exposure E (1 saturates just below):
+// 1.06 (1 - exp(-3 E^0.7)), clipped at 1. A toe like E^0.7 and a shoulder.
+inline double film_curve(double exposure) {
+  return std::min(1.0, 1.06 * (1.0 - std::exp(-3.0 * std::pow(std::max(exposure, 0.0), 0.7))));
+}
+// Its inverse for code / 255 = v < 1.
+inline double film_curve_inverse(double v) { return std::pow(-std::log(1.0 - v / 1.06) / 3.0, 1.0 / 0.7); }
+
+// The scene: a gradient over five decades along x (0.02 to 2000), a texture, a colour,
+// and a hot spot (radius height/8, 50000) that saturates every exposure.
+struct SyntheticScene {
+  int width = 0, height = 0;
+  std::vector<double> radiance;  // width * height * 3
+  std::vector<uint8_t> hot;      // 1 in the hot spot
+};
+inline SyntheticScene synthetic_scene(int width, int height) {
+  SyntheticScene scene{width, height, std::vector<double>(size_t(width) * height * 3), {}};
+  scene.hot.assign(size_t(width) * height, 0);
+  const double colour[3] = {1.0, 0.6, 0.35};
+  const double r = height / 8.0, cx = width * 0.85, cy = height * 0.3;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t p = size_t(y) * width + x;
+      const double gradient = 0.02 * std::pow(1e5, (x + 0.5) / width);
+      const double texture = 1.0 + 0.3 * std::sin(x * 0.7) * std::sin(y * 0.45);
+      scene.hot[p] = (x - cx) * (x - cx) + (y - cy) * (y - cy) < r * r;
+      for (int c = 0; c < 3; ++c) scene.radiance[p * 3 + c] = scene.hot[p] ? 5e4 : gradient * texture * colour[c];
+    }
+  return scene;
+}
+
+// The scene photographed for `seconds` through film_curve: 60000 electrons at E = 1 (a
+// full-frame sensor at base ISO),
+// Poisson shot noise (as a Gaussian) and 5 electrons of read noise, unless `noise` is off.
+inline PhotoCodes photograph(const SyntheticScene& scene, double seconds, uint64_t seed, bool noise = true) {
+  constexpr double kFullWell = 60000.0, kReadNoise = 5.0;
+  PhotoCodes photo{scene.width, scene.height, 8, false, std::vector<uint16_t>(scene.radiance.size())};
+  Pcg32 rng(seed, uint64_t(seconds * 1e6));
+  auto gaussian = [&rng] {  // Box-Muller
+    const double u = std::max<double>(rng.next_float(), 1e-9), v = rng.next_float();
+    return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * M_PI * v);
+  };
+  for (size_t i = 0; i < scene.radiance.size(); ++i) {
+    double electrons = scene.radiance[i] * seconds * kFullWell;
+    if (noise) electrons += std::sqrt(electrons) * gaussian() + kReadNoise * gaussian();
+    photo.codes[i] = uint16_t(std::lround(255.0 * film_curve(electrons / kFullWell)));
+  }
+  return photo;
+}
+
+// Writes `photo` (8- or 16-bit, by its bits) to `path` with metadata attributes (EXIF
+// "ExposureTime", "FNumber", ... as numbers) and the EXIF ISO when `iso` > 0.
+inline void write_photo(const std::string& path, const PhotoCodes& photo,
+                        const std::map<std::string, float>& attributes = {}, int iso = 0) {
+  auto output = OIIO::ImageOutput::create(path);
+  if (!output) throw Error(path + ": no writer");
+  OIIO::ImageSpec spec(photo.width, photo.height, 3, photo.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+  for (const auto& [key, value] : attributes) spec.attribute(key, value);
+  if (iso > 0) spec.attribute("Exif:PhotographicSensitivity", iso);  // an integer, as EXIF stores it
+  if (photo.bits == 8) spec.attribute("Compression", "jpeg:100");
+  std::vector<uint8_t> bytes(photo.codes.begin(), photo.codes.end());
+  const bool ok = output->open(path, spec) &&
+                  (photo.bits == 8 ? output->write_image(OIIO::TypeDesc::UINT8, bytes.data())
+                                   : output->write_image(OIIO::TypeDesc::UINT16, photo.codes.data())) &&
+                  output->close();
+  if (!ok) throw Error(path + ": " + output->geterror());
+}
+
+}  // namespace glaze::testing
