@@ -39,6 +39,7 @@ constexpr Command kCommands[] = {{"demo", declare_demo},
                                  {"render", declare_render},
                                  {"convergence", declare_convergence},
                                  {"invert-fit", declare_invert_fit},
+                                 {"register", declare_register},
                                  {"preview", declare_preview},
                                  {"reproduce", declare_reproduce},
                                  {"help", declare_help}};
