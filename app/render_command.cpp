@@ -16,12 +16,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
 #include <iostream>
+#include <sstream>
 
 namespace glaze {
 namespace {
@@ -45,7 +47,38 @@ struct RenderCommandOptions {
   // The sh integrator.
   int lmax = 4, supersampling = 2, refined_supersampling = 0;
   DisplaySettings display;  // of a picture
+  std::string lens;         // --lens MODEL:k1=..,..: every camera seen through it
 };
+
+// --lens MODEL[:NAME=VALUE,...], MODEL as transforms.json's "camera_model" names it.
+LensDistortion parse_lens(const std::string& text) {
+  const std::string usage =
+      "--lens takes MODEL[:NAME=VALUE,...], e.g. OPENCV:k1=-0.1,k2=0.02 or OPENCV_FISHEYE:k1=0.05; ";
+  const size_t colon = text.find(':');
+  const std::string name = text.substr(0, colon);
+  const std::optional<LensDistortion::Model> model = camera_model_from_name(name);
+  if (!model) throw Error(usage + "\"" + name + "\" is not a camera model (" + kSupportedCameraModels + ")");
+  LensDistortion lens;
+  lens.model = *model;
+  std::stringstream terms(colon == std::string::npos ? "" : text.substr(colon + 1));
+  for (std::string term; std::getline(terms, term, ',');) {
+    const size_t equals = term.find('=');
+    const std::string key = term.substr(0, equals);
+    if (equals == std::string::npos || !model_uses(*model, key))
+      throw Error(usage + "\"" + term + "\" is not NAME=VALUE with a coefficient of " + name + " (" +
+                  kSupportedCameraModels + ")");
+    size_t used = 0;
+    double value = NAN;
+    try {
+      value = std::stod(term.substr(equals + 1), &used);
+    } catch (const std::exception&) {
+    }
+    if (!std::isfinite(value) || used != term.size() - equals - 1)
+      throw Error(usage + "\"" + term + "\" does not give " + key + " a finite number");
+    coefficient(lens, key) = value;
+  }
+  return lens;
+}
 
 std::string materials_json(const Scene& scene) {
   nlohmann::json list = nlohmann::json::array();
@@ -72,10 +105,19 @@ struct Job {
   bool progress;                     // say which camera renders
   std::optional<std::pair<int, int>> resolution;
   DisplaySettings display;  // of a picture (.png, .jpg) instead of radiance
+  LensDistortion lens;
+
+  PinholeCamera camera(const CameraSpec& spec) const {
+    PinholeCamera camera = scene.make_camera(spec, resolution);
+    if (lens.is_none()) return camera;
+    camera.distortion = lens;
+    camera.check_lens("--lens on camera '" + spec.name + "'");
+    return camera;
+  }
 
   // `folder`, if given, tags the image with its run.
   void render_to(const CameraSpec& spec, const std::string& path, OutputFolder* folder = nullptr) const {
-    const PinholeCamera camera = scene.make_camera(spec, resolution);
+    const PinholeCamera camera = this->camera(spec);
     if (progress) std::cerr << "rendering " << spec.name << " (" << camera.width << "x" << camera.height << ")\n";
     // Each camera draws its own random streams (render.h): views of one set have
     // independent noise.
@@ -108,7 +150,7 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
   for (const std::string& name : holdout) held_out_cameras.insert(&scene.camera(name));
   if (held_out_cameras.size() == scene.cameras.size())
     throw Error("--holdout names every camera of " + scene.path + "; leave at least one for the capture set");
-  for (const CameraSpec& spec : scene.cameras) check_capture_camera(scene.make_camera(spec, job.resolution));
+  for (const CameraSpec& spec : scene.cameras) check_capture_camera(job.camera(spec));
   // Held-out views go to DIR/holdout, a set of its own. DIR's transforms.json, written
   // last, says that both are whole (output_folder.h).
   const std::filesystem::path root(directory);
@@ -170,7 +212,7 @@ void write_captures(const Job& job, const std::string& directory, const std::vec
       char file[64];
       std::snprintf(file, sizeof file, "view_%03zu.exr", set.frames.size());
       job.render_to(spec, folder.file(file).string(), &folder);
-      set.frames.push_back({file, scene.make_camera(spec, job.resolution), ""});
+      set.frames.push_back({file, job.camera(spec), ""});
     }
     return set;
   };
@@ -215,7 +257,8 @@ int render(const RenderCommandOptions& args) {
                 integrator_options,
                 options.progress,
                 args.resolution ? std::optional(args.resolution->pair()) : std::nullopt,
-                args.display};
+                args.display,
+                args.lens.empty() ? LensDistortion{} : parse_lens(args.lens)};
 
   if (args.captures) {
     write_captures(job, *args.captures, args.holdout, environment);
@@ -254,6 +297,10 @@ CommandRun declare_render(CLI::App& app) {
   add_names(app, "--holdout NAME,...", args->holdout,
             "cameras held out of the capture set: written to DIR/holdout, which invert-fit re-renders")
       ->needs(captures);
+  add_text(app, "--lens MODEL:NAME=VALUE,...", args->lens,
+           "see every camera through a distorting lens, as transforms.json names it:\n"
+           "OPENCV:k1=..,k2=..,p1=..,p2=..(,k3=..) or OPENCV_FISHEYE:k1=..,k2=..,k3=..,k4=..\n"
+           "(a capture set records it, for tests of photographs' lenses)");
   add_environment_override(app, args->environment);
   add_threads(app, args->threads);
   add_integrator(app, args->integrator,

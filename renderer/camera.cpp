@@ -2,6 +2,8 @@
 
 #include "renderer/error.h"
 
+#include <sstream>
+
 namespace glaze {
 namespace {
 
@@ -40,6 +42,48 @@ PinholeCamera PinholeCamera::orthographic(std::string name, const Eigen::Affine3
   camera.fl_y = 0.5f * height / ymag;
   camera.fl_x = camera.fl_y;
   return camera;
+}
+
+Vec3 PinholeCamera::undistorted_direction(const Vec3& local) const {
+  // check_lens() has made sure that the whole film has an inverse; a film point outside
+  // it (an outer sub-pixel of a footprint at the border) keeps the pinhole's ray.
+  const std::optional<Vec2d> image = distortion.undistort(Vec2d(local.x(), -local.y()));
+  if (!image) return local;
+  return Vec3(float(image->x()), -float(image->y()), -1.0f);
+}
+
+void PinholeCamera::check_lens(const std::string& where) const {
+  if (distortion.is_none()) return;
+  if (projection != Projection::perspective)
+    throw Error(where + ": lens distortion is for perspective cameras only, not orthographic ones");
+  // The models' folds are rings about the axis, so the film's border and a grid inside it
+  // find them; the border is walked pixel by pixel.
+  const auto one_to_one = [&](double x, double y) {
+    const Vec2d film((x - cx) / fl_x, (y - cy) / fl_y);
+    const std::optional<Vec2d> image = distortion.undistort(film);
+    return image && (distortion.distort(*image) - film).norm() <= 1e-9 * (1.0 + film.norm());
+  };
+  const auto refuse = [&](double x, double y) {
+    std::ostringstream message;
+    message << where << ": the " << camera_model_name(distortion.model) << " lens model (k1 " << distortion.k1
+            << ", k2 " << distortion.k2 << ", k3 " << distortion.k3 << ", k4 " << distortion.k4 << ", p1 "
+            << distortion.p1 << ", p2 " << distortion.p2 << ") folds back before film point (" << x << ", " << y
+            << ") of the " << width << "x" << height
+            << " film: pixels there would have no ray or two; check the coefficients and the focal length they were "
+               "calibrated with";
+    throw Error(message.str());
+  };
+  for (int i = 0; i <= width; ++i)
+    for (const double y : {0.0, double(height)})
+      if (!one_to_one(i, y)) refuse(i, y);
+  for (int j = 0; j <= height; ++j)
+    for (const double x : {0.0, double(width)})
+      if (!one_to_one(x, j)) refuse(x, j);
+  constexpr int kGrid = 32;
+  for (int j = 1; j < kGrid; ++j)
+    for (int i = 1; i < kGrid; ++i)
+      if (!one_to_one(double(width) * i / kGrid, double(height) * j / kGrid))
+        refuse(double(width) * i / kGrid, double(height) * j / kGrid);
 }
 
 }  // namespace glaze

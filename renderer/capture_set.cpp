@@ -37,8 +37,17 @@ json rows(const auto& matrix) {
   return rows;
 }
 
+// The intrinsics, with the lens model and its coefficients as nerfstudio names them.
 json intrinsics(const PinholeCamera& c) {
-  return {{"w", c.width}, {"h", c.height}, {"fl_x", c.fl_x}, {"fl_y", c.fl_y}, {"cx", c.cx}, {"cy", c.cy}};
+  json entry = {{"w", c.width}, {"h", c.height}, {"fl_x", c.fl_x}, {"fl_y", c.fl_y}, {"cx", c.cx}, {"cy", c.cy}};
+  LensDistortion lens = c.distortion;
+  entry["camera_model"] = camera_model_name(lens.model);
+  for (const char* name : kDistortionCoefficients)
+    // OPENCV's k3 is optional (COLMAP's OPENCV has none).
+    if (model_uses(lens.model, name) &&
+        !(lens.model == LensDistortion::Model::opencv && name == std::string("k3") && lens.k3 == 0.0))
+      entry[name] = coefficient(lens, name);
+  return entry;
 }
 
 json object_json(const CaptureObject& object) {
@@ -77,8 +86,9 @@ json renderer_json(const CaptureRenderer& renderer) {
 void check_capture_camera(const PinholeCamera& camera) {
   if (camera.projection != Projection::perspective)
     throw Error("camera '" + camera.name +
-                "' is orthographic; a capture set (transforms.json) holds pinhole cameras only: leave it out, "
+                "' is orthographic; a capture set (transforms.json) holds perspective cameras only: leave it out, "
                 "or give the view a perspective camera");
+  camera.check_lens("camera '" + camera.name + "'");
 }
 
 std::string transforms_json(const CaptureSet& captures) {
@@ -156,12 +166,15 @@ Range parameter_range(MaterialParameter parameter) {
 }
 
 // Every number in the file is read through here: a JSON number within `range`.
-float number(const json& value, const std::string& where, const std::string& key, const Range& range) {
+double number_double(const json& value, const std::string& where, const std::string& key, const Range& range) {
   const double x = value.is_number() ? value.get<double>() : std::nan("");
   const bool ok = x >= range.low && x <= range.high && !(range.low_excluded && x == range.low) &&
                   !(range.integer && x != std::floor(x));
   if (!ok) fail(where, quoted(key) + " must be " + range.text + ", not " + json_excerpt(value));
-  return float(x);
+  return x;
+}
+float number(const json& value, const std::string& where, const std::string& key, const Range& range) {
+  return float(number_double(value, where, key, range));
 }
 
 // An array of `count` numbers, each in `range`.
@@ -194,9 +207,6 @@ fs::path transforms_file(const std::string& path) {
                 "(glaze render --captures writes one)");
   return file;
 }
-
-// Lens distortion coefficients as nerfstudio and OpenCV name them.
-constexpr std::array<const char*, 6> kDistortion = {"k1", "k2", "k3", "k4", "p1", "p2"};
 
 // Reads one parsed transforms.json.
 class TransformsReader {
@@ -273,7 +283,6 @@ class TransformsReader {
   }
 
   PinholeCamera camera(const json& frame, size_t index, const std::string& where) const {
-    check_lens(frame, where);
     PinholeCamera camera;
     if (frame.contains("camera")) {
       if (!frame.at("camera").is_string())
@@ -299,25 +308,39 @@ class TransformsReader {
     camera.cx = intrinsic("cx", kFinite);
     camera.cy = intrinsic("cy", kFinite);
     camera.camera_to_world = pose(frame, where);
+    camera.distortion = lens(frame, where);
+    camera.check_lens(where);
     return camera;
   }
 
-  // glaze renders through an ideal pinhole, so distorted images cannot be compared with
-  // its renders; undistorting them is the photographer's job (e.g. COLMAP's undistorter).
-  void check_lens(const json& frame, const std::string& where) const {
-    const std::string remedy =
-        "; undistort the images first (e.g. with COLMAP's image_undistorter) and describe "
-        "them as \"camera_model\": \"PINHOLE\" without distortion coefficients";
-    if (const auto [model, model_where] = setting(frame, where, "camera_model");
-        model && *model != "PINHOLE" && *model != "OPENCV")
-      fail(model_where,
-           "\"camera_model\" " + json_excerpt(*model) + " is not supported: glaze's camera is a pinhole" + remedy);
-    for (const char* key : kDistortion) {
+  // The lens ("camera_model" and the coefficients), as nerfstudio reads them: without a
+  // model, coefficients mean OPENCV. Models glaze does not cast rays through are refused
+  // rather than read as a pinhole, which would misplace every pixel but the centre.
+  LensDistortion lens(const json& frame, const std::string& where) const {
+    LensDistortion lens;
+    bool any = false;
+    for (const char* key : kDistortionCoefficients) {
       const auto [value, value_where] = setting(frame, where, key);
-      if (value && number(*value, value_where, key, kFinite) != 0.0f)
-        fail(value_where, "lens distortion " + quoted(key) + " = " + json_excerpt(*value) +
-                              " is not supported: glaze's camera is a pinhole" + remedy);
+      if (!value) continue;
+      coefficient(lens, key) = number_double(*value, value_where, key, kFinite);
+      any = any || coefficient(lens, key) != 0.0;
     }
+    const auto [model, model_where] = setting(frame, where, "camera_model");
+    const std::string remedy = std::string("; ") + kSupportedCameraModels +
+                               ": undistort the images to one of these (e.g. with COLMAP's image_undistorter)";
+    if (model && !model->is_string())
+      fail(model_where, "\"camera_model\" must be a string" + remedy + ", not " + json_excerpt(*model));
+    const std::string name = model ? model->get<std::string>() : "OPENCV";
+    const std::optional<LensDistortion::Model> parsed = camera_model_from_name(name);
+    if (!parsed) fail(model_where, "\"camera_model\" " + json_excerpt(*model) + " is not supported" + remedy);
+    for (const char* key : kDistortionCoefficients)
+      if (coefficient(lens, key) != 0.0 && !model_uses(*parsed, key))
+        fail(model ? model_where : where, quoted(key) + " = " + json_excerpt(coefficient(lens, key)) +
+                                              " is not a coefficient of the " + name + " camera model" +
+                                              (model ? "" : " (assumed: no \"camera_model\" given)") + remedy);
+    // OPENCV with zero coefficients is a pinhole; OPENCV_FISHEYE with zeros is not (theta' = theta).
+    lens.model = *parsed == LensDistortion::Model::opencv && !any ? LensDistortion::Model::none : *parsed;
+    return lens;
   }
 
   // "transform_matrix": 4x4 row-major camera-to-world, which must be rigid (the renderer

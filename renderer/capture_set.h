@@ -17,8 +17,9 @@
 //     "run": ID }                      (optional: the glaze run that wrote the set and its images)
 //
 // Relative paths are relative to the directory holding transforms.json. A per-frame
-// intrinsic overrides the top-level one. The camera is a pinhole: "camera_model" may only
-// be PINHOLE or OPENCV, and lens distortion (k1..k4, p1, p2) must be zero.
+// intrinsic overrides the top-level one. "camera_model" is PINHOLE or SIMPLE_PINHOLE (no
+// distortion), OPENCV (k1 k2 p1 p2, optional k3) or OPENCV_FISHEYE (k1..k4), the lens
+// models of lens_distortion.h; without it, distortion coefficients mean OPENCV.
 #pragma once
 
 #include "renderer/camera.h"
@@ -85,7 +86,8 @@ struct CaptureSet {
   std::string run;                  // the glaze run that wrote the set ("run"; output_folder.h), or empty
 };
 
-// Throws glaze::Error unless `camera` is one a capture set can hold (a pinhole).
+// Throws glaze::Error unless `camera` is one a capture set can hold (perspective, with a
+// lens model that is one-to-one over its film).
 void check_capture_camera(const PinholeCamera& camera);
 
 // The text of the transforms.json of `captures`. Intrinsics shared by every frame are

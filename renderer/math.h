@@ -15,6 +15,7 @@
 namespace glaze {
 
 using Vec2 = Eigen::Vector2f;
+using Vec2d = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3f;
 using Vec3d = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3f;

@@ -567,28 +567,57 @@ TEST(CaptureSet, PrincipalPointBeyondFloatIsAnError) {
 // 5. Lens distortion and camera models.
 // ---------------------------------------------------------------------------------------
 
-TEST(CaptureSet, TopLevelDistortionIsAnError) {
+TEST(CaptureSet, OpencvDistortionIsReadAsGivenTopLevelOrPerFrame) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
   transforms["camera_model"] = "OPENCV";
   transforms["k1"] = -0.12;
-  EXPECT_TRUE(rejected(dir, transforms, {"\"k1\"", "distortion", "not supported", "undistort"}));
+  transforms["k2"] = 0.031;
+  transforms["frames"][1]["p2"] = 0.001;
+  const CaptureSet set = read_back(dir, transforms);
+  for (const CaptureFrame& frame : set.frames) {
+    EXPECT_EQ(frame.camera.distortion.model, LensDistortion::Model::opencv);
+    EXPECT_EQ(frame.camera.distortion.k1, -0.12) << "read as a double, not rounded through a float";
+    EXPECT_EQ(frame.camera.distortion.k2, 0.031);
+  }
+  EXPECT_EQ(set.frames[0].camera.distortion.p2, 0.0);
+  EXPECT_EQ(set.frames[1].camera.distortion.p2, 0.001);
 }
 
-TEST(CaptureSet, PerFrameDistortionIsAnError) {
+// nerfstudio reads coefficients without a "camera_model" as OPENCV.
+TEST(CaptureSet, CoefficientsWithoutAModelAreOpencv) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
   transforms["frames"][1]["p2"] = 0.001;
-  EXPECT_TRUE(rejected(dir, transforms, {"frame 1", "\"p2\"", "distortion", "undistort"}));
+  const CaptureSet set = read_back(dir, transforms);
+  EXPECT_EQ(set.frames[0].camera.distortion.model, LensDistortion::Model::none);
+  EXPECT_EQ(set.frames[1].camera.distortion.model, LensDistortion::Model::opencv);
 }
 
-// A zero at the top level does not excuse a non-zero k4 in a frame.
-TEST(CaptureSet, FrameDistortionOverridesZeroAtTopIsAnError) {
+TEST(CaptureSet, FisheyeIsReadEvenWithZeroCoefficients) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
-  transforms["k4"] = 0.0;
-  transforms["frames"][0]["k4"] = 0.3;
-  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"k4\"", "distortion"}));
+  transforms["camera_model"] = "OPENCV_FISHEYE";
+  transforms["frames"][0]["k4"] = 0.002;
+  const CaptureSet set = read_back(dir, transforms);
+  // k = 0 is the equidistant fisheye (theta' = theta), not a pinhole.
+  EXPECT_EQ(set.frames[1].camera.distortion.model, LensDistortion::Model::opencv_fisheye);
+  EXPECT_EQ(set.frames[0].camera.distortion.k4, 0.002);
+}
+
+TEST(CaptureSet, CoefficientsOfAnotherModelAreAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["frames"][0]["k4"] = 0.3;  // k4 is the fisheye's; without a model, OPENCV is assumed
+  EXPECT_TRUE(rejected(dir, transforms, {"frame 0", "\"k4\"", "OPENCV camera model", "assumed", "OPENCV_FISHEYE"}));
+  transforms = valid_transforms(dir);
+  transforms["camera_model"] = "PINHOLE";
+  transforms["frames"][1]["k1"] = -0.1;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"k1\"", "PINHOLE camera model"}));
+  transforms = valid_transforms(dir);
+  transforms["camera_model"] = "OPENCV_FISHEYE";
+  transforms["p1"] = 0.01;
+  EXPECT_TRUE(rejected(dir, transforms, {"\"p1\"", "OPENCV_FISHEYE camera model"}));
 }
 
 TEST(CaptureSet, DistortionNotANumberIsAnError) {
@@ -598,11 +627,47 @@ TEST(CaptureSet, DistortionNotANumberIsAnError) {
   EXPECT_TRUE(rejected(dir, transforms, {"\"k2\" must be a finite number"}));
 }
 
-TEST(CaptureSet, FisheyeCameraModelIsAnError) {
+TEST(CaptureSet, CameraModelsGlazeCannotCastRaysThroughAreAnError) {
   TemporaryDirectory dir;
   json transforms = valid_transforms(dir);
-  transforms["camera_model"] = "OPENCV_FISHEYE";
-  EXPECT_TRUE(rejected(dir, transforms, {"\"camera_model\"", "OPENCV_FISHEYE", "not supported", "PINHOLE"}));
+  transforms["camera_model"] = "SIMPLE_RADIAL";
+  EXPECT_TRUE(rejected(dir, transforms,
+                       {"\"camera_model\"", "SIMPLE_RADIAL", "not supported", "OPENCV_FISHEYE", "image_undistorter"}));
+}
+
+// A barrel term strong enough to fold the image back inside the film leaves pixels with
+// no ray: refused, naming the film point.
+TEST(CaptureSet, LensThatFoldsInsideTheFilmIsAnError) {
+  TemporaryDirectory dir;
+  json transforms = valid_transforms(dir);
+  transforms["k1"] = -0.5;  // r (1 - 0.5 r^2) peaks at 0.544; the 4x3 film's corners at f 5 are at 0.5 ...
+  EXPECT_EQ(read_back(dir, transforms).frames[0].camera.distortion.k1, -0.5);
+  transforms["fl_x"] = transforms["fl_y"] = 2.0;  // ... and at f 2 at 1.25
+  EXPECT_TRUE(rejected(dir, transforms, {"OPENCV lens model", "folds back", "4x3 film"}));
+}
+
+TEST(CaptureSet, DistortedCamerasRoundTripThroughTheWriter) {
+  TemporaryDirectory dir;
+  CaptureSet set;
+  set.object = CaptureSphere{};
+  for (int i = 0; i < 3; ++i) {
+    PinholeCamera c =
+        camera("view_" + std::to_string(i), 4, 3, 5, 5.5f, 2, 1.5f, rigid(40.0f * i, Vec3::UnitY(), Vec3(0, 0, 4)));
+    c.distortion = i == 2 ? LensDistortion{LensDistortion::Model::opencv_fisheye, 0.01, -0.002, 0.0003, -0.00004}
+                          : LensDistortion{LensDistortion::Model::opencv, -0.1, 0.02, 0.003, 0, 0.0011, -0.0007};
+    set.frames.push_back({"view_" + std::to_string(i) + ".exr", c, {}});
+    write_view(dir, set.frames.back().file_path);
+  }
+  write_transforms(dir.path().string(), set);
+  const CaptureSet read = read_transforms(dir.path().string());
+  ASSERT_EQ(read.frames.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const LensDistortion &a = read.frames[i].camera.distortion, &b = set.frames[i].camera.distortion;
+    EXPECT_EQ(a.model, b.model) << i;
+    EXPECT_EQ(std::vector<double>({a.k1, a.k2, a.k3, a.k4, a.p1, a.p2}),
+              std::vector<double>({b.k1, b.k2, b.k3, b.k4, b.p1, b.p2}))
+        << i;
+  }
 }
 
 // ---------------------------------------------------------------------------------------

@@ -102,7 +102,7 @@ TEST(HostileInput, WronglyTypedValuesInTransformsNameTheKey) {
       {{"renderer"}, {{"integrator", "path"}, {"spp", "4"}}, "\"spp\" must be a whole number"},
       {{"renderer"}, json::array(), "\"renderer\": must be"},
       {{"renderer"}, "sh", "\"renderer\": must be"},
-      {{"frames", "0", "camera_model"}, 5, "\"camera_model\" 5 is not supported"},
+      {{"frames", "0", "camera_model"}, 5, "\"camera_model\" must be a string"},
       {{"frames", "0", "camera"}, json::object(), "\"camera\" must be the camera's name"},
       // Found by fuzzing: an empty name was read, then dropped by write_transforms.
       {{"environment"}, {{"procedural", ""}}, "not a procedural environment"},

@@ -263,6 +263,13 @@ void write_transforms_seeds(const fs::path& out) {
     "cx": 2.0, "cy": 2.0, "k1": 0, "k2": 0, "p1": 0, "p2": 0, "aabb_scale": 16,
     "frames": [{"file_path": "view_000.exr", "transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4],
     [0, 0, 0, 1]], "colmap_im_id": 1}], "object": {"type": "sphere", "center": [0, 0, 0], "radius": 1}})");
+  // Lenses: OPENCV with distortion, and a fisheye frame beside it.
+  write_text(out / "lenses.json", R"({"camera_model": "OPENCV", "w": 4, "h": 4, "fl_x": 5.0, "fl_y": 5.0,
+    "cx": 2.0, "cy": 2.0, "k1": -0.12, "k2": 0.03, "p1": 0.001, "p2": -0.002, "k3": 0.001,
+    "frames": [{"file_path": "view_000.exr", "transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 4],
+    [0, 0, 0, 1]]}, {"file_path": "view_001.exr", "camera_model": "OPENCV_FISHEYE", "k1": 0.05, "k2": 0, "k3": 0,
+    "k4": 0.001, "p1": 0, "p2": 0, "transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 5], [0, 0, 0, 1]]}],
+    "object": {"type": "sphere", "center": [0, 0, 0], "radius": 1}})");
 }
 
 // ----------------------------------------------------------------------------- images

@@ -27,7 +27,9 @@ bool same_camera(const PinholeCamera& a, const PinholeCamera& b) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c)
       if (!near(a.camera_to_world.matrix()(r, c), b.camera_to_world.matrix()(r, c))) return false;
-  return true;
+  const LensDistortion &lens_a = a.distortion, &lens_b = b.distortion;
+  return lens_a.model == lens_b.model && lens_a.k1 == lens_b.k1 && lens_a.k2 == lens_b.k2 && lens_a.k3 == lens_b.k3 &&
+         lens_a.k4 == lens_b.k4 && lens_a.p1 == lens_b.p1 && lens_a.p2 == lens_b.p2;
 }
 
 void check_round_trip(const CaptureSet& read) {
