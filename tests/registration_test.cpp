@@ -68,7 +68,7 @@ Eigen::Affine3f look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {
   return pose;
 }
 
-// The camera of the test: fl 600 px, principal point off centre.
+// The camera of the test: fl 600 px, principal point off centre, a barrel lens.
 PinholeCamera true_camera(const Eigen::Affine3f& pose) {
   PinholeCamera camera;
   camera.name = "board";
@@ -79,6 +79,7 @@ PinholeCamera true_camera(const Eigen::Affine3f& pose) {
   camera.fl_y = 600.0f;
   camera.cx = 323.5f;
   camera.cy = 236.0f;
+  camera.distortion = {LensDistortion::Model::opencv, -0.1, 0.02, 0.0, 0.0, 0.0, 0.0};
   return camera;
 }
 
@@ -194,6 +195,11 @@ CameraIntrinsics intrinsics_of(const PinholeCamera& camera) {
   intrinsics.fl_y = camera.fl_y;
   intrinsics.cx = camera.cx;
   intrinsics.cy = camera.cy;
+  intrinsics.k1 = camera.distortion.k1;
+  intrinsics.k2 = camera.distortion.k2;
+  intrinsics.p1 = camera.distortion.p1;
+  intrinsics.p2 = camera.distortion.p2;
+  intrinsics.k3 = camera.distortion.k3;
   return intrinsics;
 }
 
@@ -214,6 +220,11 @@ void expect_views_registered(const glaze::Registration& registration, const std:
     EXPECT_LT(view.reprojection_error_px, 0.3) << view.name;
     EXPECT_LT(degrees, 0.1) << view.name;
     EXPECT_LT(millimetres, 1.0) << view.name;
+    // glaze's camera of the view images the board's corners where the true one does.
+    const std::vector<Eigen::Vector2d> expected_corners = true_corners(truth[v]);
+    const std::vector<Eigen::Vector2d> corners = true_corners(registered_camera(registration, v));
+    for (size_t k = 0; k < corners.size(); ++k)
+      EXPECT_LT((corners[k] - expected_corners[k]).norm(), 0.3) << view.name << " corner " << k;
   }
 }
 
@@ -278,7 +289,15 @@ TEST_F(BoardRegistration, GivenIntrinsicsLocateTheViewsAlone) {
   }
   const PinholeCamera& camera = views_.front();
   json description = {{"board", {{"inner_corners", {kBoard.cols, kBoard.rows}}, {"square", kBoard.square}}},
-                      {"camera", {{"fl_x", camera.fl_x}, {"fl_y", camera.fl_y}, {"cx", camera.cx}, {"cy", camera.cy}}}};
+                      {"camera",
+                       {{"fl_x", camera.fl_x},
+                        {"fl_y", camera.fl_y},
+                        {"cx", camera.cx},
+                        {"cy", camera.cy},
+                        {"k1", camera.distortion.k1},
+                        {"k2", camera.distortion.k2},
+                        {"p1", camera.distortion.p1},
+                        {"p2", camera.distortion.p2}}}};
   write_text(*dir_, "given/shoot.json", description.dump());
   const glaze::Registration registration = register_shoot(read_shoot(shoot));
   EXPECT_FALSE(registration.calibrated);
@@ -369,9 +388,17 @@ TEST_F(BoardRegistration, CommandWritesTransformsVocabulary) {
   std::filesystem::create_directories(shoot / "view_000");
   std::filesystem::copy_file(dir_->path() / "view_000" / "board.exr", shoot / "view_000" / "board.exr");
   const PinholeCamera& camera = views_.front();
-  const json description = {
-      {"board", {{"inner_corners", {kBoard.cols, kBoard.rows}}, {"square", kBoard.square}}},
-      {"camera", {{"fl_x", camera.fl_x}, {"cx", camera.cx}, {"cy", camera.cy}, {"w", kWidth}, {"h", kHeight}}}};
+  const json description = {{"board", {{"inner_corners", {kBoard.cols, kBoard.rows}}, {"square", kBoard.square}}},
+                            {"camera",
+                             {{"fl_x", camera.fl_x},
+                              {"cx", camera.cx},
+                              {"cy", camera.cy},
+                              {"w", kWidth},
+                              {"h", kHeight},
+                              {"k1", camera.distortion.k1},
+                              {"k2", camera.distortion.k2},
+                              {"p1", camera.distortion.p1},
+                              {"p2", camera.distortion.p2}}}};
   write_text(*dir_, "command/shoot.json", description.dump());
   const std::string out = dir_->file("command/out/registration.json");
   std::filesystem::create_directories(dir_->path() / "command" / "out");

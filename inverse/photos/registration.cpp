@@ -170,6 +170,21 @@ Registration register_shoot(const Shoot& shoot) {
   return registration;
 }
 
+PinholeCamera registered_camera(const Registration& registration, size_t view) {
+  const CameraIntrinsics& c = registration.camera;
+  PinholeCamera camera;
+  camera.name = registration.views.at(view).name;
+  camera.camera_to_world = Eigen::Affine3f(registration.views[view].camera_to_world.cast<float>());
+  camera.width = c.width;
+  camera.height = c.height;
+  camera.fl_x = float(c.fl_x);
+  camera.fl_y = float(c.fl_y);
+  camera.cx = float(c.cx);
+  camera.cy = float(c.cy);
+  camera.distortion = {LensDistortion::Model::opencv, c.k1, c.k2, c.k3, 0.0, c.p1, c.p2};
+  return camera;
+}
+
 std::string registration_json(const Registration& registration, const fs::path& folder) {
   const CameraIntrinsics& c = registration.camera;
   json root = {

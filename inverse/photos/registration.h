@@ -15,6 +15,7 @@
 #pragma once
 
 #include "inverse/photos/shoot.h"
+#include "renderer/camera.h"
 
 #include <Eigen/Core>
 
@@ -40,6 +41,9 @@ struct Registration {
   double calibration_error_px = 0.0;
   std::vector<ViewRegistration> views;
 };
+
+// glaze's camera of view `view`: its pose, the intrinsics and the lens (opencv model).
+PinholeCamera registered_camera(const Registration& registration, size_t view);
 
 // Registers the views of `shoot` (shoot.h), reading its board photos. Throws glaze::Error
 // naming the photo where a board is not found or the photos differ in size, and when
