@@ -19,6 +19,7 @@ CommandRun declare_invert_fit(CLI::App& app);   // invert_command.cpp
 CommandRun declare_preview(CLI::App& app);      // preview_command.cpp, built with GLAZE_PREVIEW
 CommandRun declare_reproduce(CLI::App& app);    // reproduce_command.cpp
 CommandRun declare_hdr_merge(CLI::App& app);    // hdr_merge_command.cpp
+CommandRun declare_register(CLI::App& app);     // register_command.cpp
 
 inline int command_render(const std::vector<std::string>& args) { return run_command("render", declare_render, args); }
 inline int command_convergence(const std::vector<std::string>& args) {

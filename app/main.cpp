@@ -40,6 +40,7 @@ constexpr Command kCommands[] = {{"demo", declare_demo},
                                  {"convergence", declare_convergence},
                                  {"invert-fit", declare_invert_fit},
                                  {"hdr-merge", declare_hdr_merge},
+                                 {"register", declare_register},
                                  {"preview", declare_preview},
                                  {"reproduce", declare_reproduce},
                                  {"help", declare_help}};

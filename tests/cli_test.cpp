@@ -98,6 +98,7 @@ const std::map<std::string, std::vector<std::string>> kCommandOptions = {
                     "--R0",      "--Rd",           "--env-res",      "--solve-res",
                     "--ridge",   "--diffuse-lmax", "--max-passes",   "--preview",
                     "--frames",  "--screenshot",   "--exposure",     "--tone-map"}},
+    {"register", {"--out"}},
 #if GLAZE_HAVE_PREVIEW
     {"preview",
      {"--camera",   "--res",       "--integrator", "--lmax",      "--ss",           "--max-spp",  "--seed",
