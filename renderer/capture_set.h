@@ -17,8 +17,11 @@
 //     "run": ID }                      (optional: the glaze run that wrote the set and its images)
 //
 // Relative paths are relative to the directory holding transforms.json. A per-frame
-// intrinsic overrides the top-level one. The camera is a pinhole: "camera_model" may only
-// be PINHOLE or OPENCV, and lens distortion (k1..k4, p1, p2) must be zero.
+// intrinsic overrides the top-level one. Read as other tools write them too: Blender's
+// "camera_angle_x"/"camera_angle_y" (w, h from the image when absent), a "file_path"
+// without an extension (+ ".png"), nerfstudio's "applied_transform"/"applied_scale"
+// (undone on the poses: "object" and "environment" are in the original frame). The camera is a pinhole: "camera_model"
+// may only be PINHOLE or OPENCV, and lens distortion (k1..k4, p1, p2) must be zero.
 #pragma once
 
 #include "renderer/camera.h"

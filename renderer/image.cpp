@@ -10,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <cstdio>
@@ -21,6 +22,15 @@ namespace glaze {
 
 float srgb_to_linear(float encoded) {
   return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+int Image::code(float value) const {
+  const float encoded = source_srgb ? linear_to_srgb(value) : value;
+  return int(std::lround(std::clamp(encoded, 0.0f, 1.0f) * float(max_code())));
+}
+
+float linear_to_srgb(float linear) {
+  return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
 }
 
 namespace {
@@ -61,6 +71,11 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
   const bool srgb_encoded = integer_format && !OIIO::Strutil::iequals(color_space, "linear");
 
   Image image(spec.width, spec.height);
+  if (integer_format) {
+    image.source_bits = int(spec.format.size()) * 8;
+    image.source_srgb = srgb_encoded;
+    image.source_lossy = std::string(input.format_name()) == "jpeg";
+  }
   const size_t count = size_t(spec.width) * spec.height;
   for (size_t i = 0; i < count; ++i) {
     for (int c = 0; c < 3; ++c) {
@@ -162,12 +177,26 @@ void write_picture(const std::string& path, int width, int height, std::span<con
   write_atomically(path, spec, OIIO::TypeDesc::UINT8, srgb.data(), metadata);
 }
 
-std::string image_attribute(const std::string& path, const std::string& key) {
+namespace {
+
+// The header of the image file `path` (for its metadata, without its pixels).
+OIIO::ImageSpec image_header(const std::string& path) {
   require_regular_file(path, "image");
   auto input = OIIO::ImageInput::open(path);
   if (!input) throw Error(path + ": cannot be read as an image (" + OIIO::geterror() + ")");
   require_known_format(*input, path);
-  return input->spec().get_string_attribute(key);
+  return input->spec();
+}
+
+}  // namespace
+
+std::string image_attribute(const std::string& path, const std::string& key) {
+  return image_header(path).get_string_attribute(key);
+}
+
+ImageSize image_size(const std::string& path) {
+  const OIIO::ImageSpec spec = image_header(path);
+  return {spec.width, spec.height};
 }
 
 }  // namespace glaze
