@@ -103,7 +103,8 @@ TEST(ForeignCaptureSet, NerfSyntheticCameraAnglePathsAndAlpha) {
     EXPECT_EQ(fs::path(read.frames[f].file_path), fs::path(folder) / ("./train/r_" + std::to_string(f) + ".png"));
     EXPECT_EQ(camera.width, first.width);  // from the PNG's header
     EXPECT_EQ(camera.height, first.height);
-    const float focal = float(0.5 * first.width / std::tan(0.5 * angle));
+    // The reader holds the angle as a float (as every number of the file).
+    const float focal = float(0.5 * first.width / std::tan(0.5 * double(float(angle))));
     EXPECT_EQ(camera.fl_x, focal);
     EXPECT_EQ(camera.fl_y, focal);
     EXPECT_NEAR(camera.fl_x, first.fl_x, 1e-3f);
