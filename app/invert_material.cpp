@@ -11,6 +11,7 @@
 #include "renderer/image.h"
 #include "renderer/sh.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 
@@ -58,7 +59,11 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
       show_in_preview(preview, scene, it.R0, it.Rd, borrowed(environment), iterate_label(it));
     };
   stage = Clock::now();
-  MaterialFit fit = fit_material(samples.samples, terms, {}, 1, {}, fit_options);
+  // 8-bit captures weigh their samples by their codes' rounding (samples.h); others all 1.
+  std::vector<float> weights;
+  for (const Sample& sample : samples.samples) weights.push_back(sample.weight);
+  if (std::all_of(weights.begin(), weights.end(), [](float w) { return w == 1.0f; })) weights.clear();
+  MaterialFit fit = fit_material(samples.samples, terms, {}, 1, weights, fit_options);
   OutputFolder out(out_folder, "fit.json", "fit output");
   nlohmann::json result = {
       {"mode", mode}, {"R0", fit.R0}, {"lmax", lmax}, {"loss", args.loss}, {"pixel_footprint", footprint}};

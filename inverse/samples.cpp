@@ -9,6 +9,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -76,11 +77,31 @@ std::vector<Vec3> surface_points(const Scene& scene, int count, uint64_t seed) {
   return points;
 }
 
+// The pixels of an 8-bit image that are clipped (kJpegClipCode, samples.h); empty for
+// other images.
+std::vector<uint8_t> clipped_pixels(const Image& image) {
+  if (image.source_bits != 8) return {};
+  const int top = image.source_lossy ? kJpegClipCode : image.max_code();
+  const int reach = image.source_lossy ? kJpegClipReach : 0;
+  std::vector<uint8_t> clipped(size_t(image.width) * image.height, 0);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const RGB value = image.at(x, y);
+      if (std::max({image.code(value[0]), image.code(value[1]), image.code(value[2])}) < top) continue;
+      for (int j = std::max(0, y - reach); j <= std::min(image.height - 1, y + reach); ++j)
+        for (int i = std::max(0, x - reach); i <= std::min(image.width - 1, x + reach); ++i)
+          clipped[size_t(j) * image.width + i] = 1;
+    }
+  return clipped;
+}
+
 // Everything about one frame that deciding on a sample needs.
 struct FrameView {
   const PinholeCamera& camera;
   const Image& image;
   const Image* mask;
+  std::vector<float> alpha;
+  std::vector<uint8_t> clipped;  // 8-bit images: clipped_pixels
   std::vector<uint8_t> interior;
   float saturation;
   float min_cos;
@@ -88,22 +109,53 @@ struct FrameView {
   bool interior_pixel(int x, int y) const {
     return x >= 0 && y >= 0 && x < camera.width && y < camera.height && interior[size_t(y) * camera.width + x];
   }
+  bool masked_pixel(int x, int y) const {
+    return (mask && mask->at(x, y)[0] < 0.5f) || alpha[size_t(y) * camera.width + x] < 0.5f;
+  }
+  bool clipped_pixel(int x, int y) const { return !clipped.empty() && clipped[size_t(y) * camera.width + x]; }
   // Applies the drop rules to a hit seen through film point (fx, fy) with value `observed`.
-  bool keep(const SurfaceHit& hit, const Vec3& view, const RGB& observed, bool masked, DropCounts& dropped) const {
+  bool keep(const SurfaceHit& hit, const Vec3& view, const RGB& observed, bool clipped, bool masked,
+            DropCounts& dropped) const {
     const float mu = hit.normal.dot(view);
     if (!(mu >= min_cos)) return ++dropped.grazing, false;
     if (!observed.allFinite()) return ++dropped.non_finite, false;
-    if ((observed >= saturation).any()) return ++dropped.saturated, false;
+    if (clipped || (observed >= saturation).any()) return ++dropped.saturated, false;
     if (masked) return ++dropped.masked, false;
     return true;
   }
 };
 
-Sample make_sample(const SurfaceHit& hit, const Vec3& view, const RGB& observed, int frame, const Vec2& film) {
-  return {hit.position, hit.normal, view, hit.normal.dot(view), observed, hit.uv, frame, film};
+Sample make_sample(const SurfaceHit& hit, const Vec3& view, const RGB& observed, int frame, const Vec2& film,
+                   const Image& image) {
+  return {hit.position,
+          hit.normal,
+          view,
+          hit.normal.dot(view),
+          observed,
+          hit.uv,
+          frame,
+          film,
+          quantisation_weight(image, observed)};
 }
 
 }  // namespace
+
+float quantisation_weight(const Image& image, const RGB& value) {
+  if (image.source_bits != 8) return 1.0f;
+  const auto decoded = [&](float code) {
+    const float encoded = std::clamp(code / float(image.max_code()), 0.0f, 1.0f);
+    return image.source_srgb ? srgb_to_linear(encoded) : encoded;
+  };
+  constexpr double kRelative = 0.02;  // the relative rounding error at which the weight halves
+  double sum = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    const float code = float(image.code(value[c]));
+    const double step = decoded(code + 0.5f) - decoded(code - 0.5f);
+    const double relative = step / std::sqrt(12.0) / kRelative;
+    sum += value[c] > 0.0f ? 1.0 / (1.0 + relative * relative / (double(value[c]) * value[c])) : 0.0;
+  }
+  return float(sum / 3.0);
+}
 
 SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, const Scene& object_scene,
                           const SampleOptions& options) {
@@ -124,7 +176,8 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
     const uint64_t frame_samples = points.empty() ? uint64_t(camera.width) * uint64_t(camera.height) : points.size();
     require_memory(saturating_mul(2 * frame_samples + 2 * set.samples.size(), sizeof(Sample)),
                    "the samples of " + frame.file_path);
-    const Image image = read_image(frame.file_path);
+    std::vector<float> alpha;
+    const Image image = read_image(frame.file_path, &alpha);
     if (image.width != camera.width || image.height != camera.height)
       throw Error(frame.file_path + ": the image is " + std::to_string(image.width) + "x" +
                   std::to_string(image.height) + " but transforms.json gives its camera " +
@@ -138,10 +191,11 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
     const FrameView view{camera,
                          image,
                          mask ? &*mask : nullptr,
+                         std::move(alpha),
+                         clipped_pixels(image),
                          interior_mask(tracer, camera),
                          captures.saturation.value_or(std::numeric_limits<float>::infinity()),
                          options.min_cos};
-    auto masked_at = [&](int x, int y) { return view.mask && view.mask->at(x, y)[0] < 0.5f; };
     DropCounts dropped;
     std::vector<Sample> kept;
 
@@ -158,8 +212,10 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
             ++row_dropped[y].silhouette;
             continue;
           }
-          if (view.keep(*hit, -ray.direction, image.at(x, y), masked_at(x, y), row_dropped[y]))
-            rows[y].push_back(make_sample(*hit, -ray.direction, image.at(x, y), int(f), Vec2(x + 0.5f, y + 0.5f)));
+          if (view.keep(*hit, -ray.direction, image.at(x, y), view.clipped_pixel(x, y), view.masked_pixel(x, y),
+                        row_dropped[y]))
+            rows[y].push_back(
+                make_sample(*hit, -ray.direction, image.at(x, y), int(f), Vec2(x + 0.5f, y + 0.5f), image));
         }
       });
       for (int y = 0; y < camera.height; ++y) {
@@ -189,13 +245,18 @@ SampleSet collect_samples(const CaptureSet& captures, const RayTracer& tracer, c
         }
         const RGB observed =
             bilinear(image, bilinear_footprint(fx, fy, image.width, image.height, Wrap::clamp, Wrap::clamp));
-        const bool masked =
-            masked_at(x0, y0) || masked_at(x0 + 1, y0) || masked_at(x0, y0 + 1) || masked_at(x0 + 1, y0 + 1);
-        if (view.keep(*hit, -ray.direction, observed, masked, dropped))
-          kept.push_back(make_sample(*hit, -ray.direction, observed, int(f), Vec2(fx, fy)));
+        const auto any_of_four = [&](auto&& test) {
+          return test(x0, y0) || test(x0 + 1, y0) || test(x0, y0 + 1) || test(x0 + 1, y0 + 1);
+        };
+        const bool clipped = any_of_four([&](int x, int y) { return view.clipped_pixel(x, y); });
+        const bool masked = any_of_four([&](int x, int y) { return view.masked_pixel(x, y); });
+        if (view.keep(*hit, -ray.direction, observed, clipped, masked, dropped))
+          kept.push_back(make_sample(*hit, -ray.direction, observed, int(f), Vec2(fx, fy), image));
       }
     }
     set.per_frame.push_back(kept.size());
+    set.source_bits.push_back(image.source_bits);
+    set.source_lossy.push_back(image.source_lossy);
     set.dropped.push_back(dropped);
     set.samples.insert(set.samples.end(), kept.begin(), kept.end());
   }

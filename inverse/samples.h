@@ -29,6 +29,9 @@ struct Sample {
   Vec2 uv;    // texture coordinate (lat-long of the normal for a sphere)
   int frame;  // index into the capture set's frames
   Vec2 film;  // where it was seen: the pixel centre (pixel samples) or the projected point
+  // Its weight in the material fits (1: full): below 1 where 8-bit quantisation is a
+  // sizeable part of the value (near-black codes; see quantisation_weight).
+  float weight = 1.0f;
 };
 
 struct DropCounts {
@@ -50,9 +53,26 @@ struct SampleSet {
   std::vector<Sample> samples;      // frame by frame, in a fixed order
   std::vector<size_t> per_frame;    // samples kept per frame
   std::vector<DropCounts> dropped;  // per frame
+  std::vector<int> source_bits;     // per frame: its image's Image::source_bits (8: an 8-bit file)
+  std::vector<bool> source_lossy;   // per frame: its image's Image::source_lossy (a JPEG)
   DropCounts total_dropped() const;
 };
 
+// 8-bit images (PNG, JPEG): a code at the top of the range is the sensor's or the
+// encoder's clipping, not the light, and such a pixel counts as saturated whatever the
+// set's "saturation"; in a JPEG, whose blocks spread clipping over their neighbours, so
+// does every pixel within kJpegClipReach of a code at or above kJpegClipCode.
+inline constexpr int kJpegClipCode = 250;
+inline constexpr int kJpegClipReach = 8;
+
+// The weight of an observation `value` (linear RGB) of an 8-bit image: per channel
+// 1 / (1 + (q / 0.02)^2), with q the relative standard deviation of the code's rounding
+// (its step in linear units / sqrt(12) / value), averaged over the channels. Near-black
+// codes, whose rounding is a large part of the value, count little (code 0: nothing);
+// from code ~30 up a weight is within 20% of 1. 1 for other images.
+float quantisation_weight(const Image& image, const RGB& value);
+
+// A pixel is masked where its mask's value, or its image's alpha, is below 0.5.
 // Throws glaze::Error naming the file for an image whose size differs from its camera,
 // a mask of the wrong size, or a set in which no view sees the object.
 SampleSet collect_samples(const CaptureSet& captures, const RayTracer& object, const Scene& object_scene,

@@ -28,7 +28,7 @@ RecoveredTexture fit_texture(std::span<const Sample> samples, std::span<const Sh
     const RGB specular = predict(terms[k], homogeneous.R0, RGB::Zero());
     // Clamped: the unclamped SH sum can ring below zero, which must not make a weight negative.
     const float diffuse = std::max(0.0f, luminance(total - specular)), mirror = std::max(0.0f, luminance(specular));
-    weights[k] = samples[k].mu * (diffuse + mirror > 0.0f ? diffuse / (diffuse + mirror) : 0.0f);
+    weights[k] = samples[k].weight * samples[k].mu * (diffuse + mirror > 0.0f ? diffuse / (diffuse + mirror) : 0.0f);
   }
   RecoveredTexture texture;
   texture.fit = fit_material(samples, terms, group, width * height, weights, options);

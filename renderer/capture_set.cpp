@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <utility>
 
 namespace glaze {
@@ -228,6 +229,8 @@ class TransformsReader {
     set.directory = directory_.string();
     set.file = file_;
     for (size_t i = 0; i < frames.size(); ++i) set.frames.push_back(frame(frames[i], i));
+    const AppliedTransform applied = applied_transform();
+    for (CaptureFrame& frame : set.frames) frame.camera.camera_to_world = applied.undo(frame.camera.camera_to_world);
     set.object = object();
     set.environment = environment();
     set.material = material();
@@ -276,10 +279,63 @@ class TransformsReader {
     const json& file_path = member(entry, "file_path", where, "the image's file name");
     where += " (" + json_excerpt(file_path) + ")";
     CaptureFrame frame;
-    frame.file_path = existing_file(file_path, where, "file_path");
+    frame.file_path = image_file(file_path, where);
     if (entry.contains("mask_path")) frame.mask_path = existing_file(entry.at("mask_path"), where, "mask_path");
-    frame.camera = camera(entry, index, where);
+    frame.camera = camera(with_image_intrinsics(entry, where, frame.file_path), index, where);
     return frame;
+  }
+
+  // "file_path" as nerfstudio resolves it: the path as given, else, for a path without an
+  // extension (NeRF-synthetic's "./train/r_0"), that path + ".png" (nerfstudio's Blender
+  // data parser appends ".png" to every path; its own format takes paths as they are).
+  std::string image_file(const json& value, const std::string& where) const {
+    const fs::path resolved = resolved_file(value, where, "file_path");
+    std::error_code ec;
+    if (resolved.has_extension() || fs::exists(resolved, ec)) return existing_file(value, where, "file_path");
+    const fs::path png = fs::path(resolved).concat(".png");
+    if (!fs::exists(png, ec))
+      fail(where, "\"file_path\" names " + resolved.string() + ", which does not exist, nor does " + png.string() +
+                      " (tried for a path without an extension, as NeRF-synthetic sets write them); relative "
+                      "paths are relative to " +
+                      directory_.string());
+    return existing_file(json(value.get<std::string>() + ".png"), where, "file_path");
+  }
+
+  // `entry` with the intrinsics it leaves out derived as Blender and NeRF-synthetic sets
+  // imply them: "w" and "h" from the image file's header; from "camera_angle_x" (the
+  // horizontal field of view in radians) fl_x = w / 2 / tan(camera_angle_x / 2), fl_y the
+  // same from "camera_angle_y" if given, else fl_x (square pixels); cx = w / 2, cy = h / 2.
+  // A value given in the file, per frame or at the top, wins over a derived one.
+  json with_image_intrinsics(const json& entry, const std::string& where, const std::string& image) const {
+    const auto given = [&](const std::string& key) { return setting(entry, where, key).first != nullptr; };
+    json completed = entry;
+    if (!given("w") || !given("h")) {
+      ImageSize size;
+      try {
+        size = image_size(image);
+      } catch (const Error& e) {
+        fail(where, std::string("the image's size (\"w\", \"h\" are not given) cannot be read: ") + e.what());
+      }
+      if (!given("w")) completed["w"] = size.width;
+      if (!given("h")) completed["h"] = size.height;
+    }
+    const auto value = [&](const std::string& key) {
+      const auto [v, v_where] = setting(completed, where, key);
+      return double(number(*v, v_where, key, kPixels));
+    };
+    const double width = value("w"), height = value("h");
+    const auto focal = [&](const std::string& angle_key, double pixels) -> std::optional<double> {
+      const auto [angle, angle_where] = setting(entry, where, angle_key);
+      if (!angle) return std::nullopt;
+      const Range kAngle{0.0, 3.14, true, false, "an angle of view in radians, in (0, 3.14]"};
+      return 0.5 * pixels / std::tan(0.5 * double(number(*angle, angle_where, angle_key, kAngle)));
+    };
+    const std::optional<double> fl_x = focal("camera_angle_x", width), fl_y = focal("camera_angle_y", height);
+    if (!given("fl_x") && (fl_x || fl_y)) completed["fl_x"] = fl_x ? *fl_x : *fl_y;
+    if (!given("fl_y") && (fl_x || fl_y)) completed["fl_y"] = fl_y ? *fl_y : *fl_x;
+    if ((fl_x || fl_y) && !given("cx")) completed["cx"] = 0.5 * width;
+    if ((fl_x || fl_y) && !given("cy")) completed["cy"] = 0.5 * height;
+    return completed;
   }
 
   PinholeCamera camera(const json& frame, size_t index, const std::string& where) const {
@@ -370,6 +426,46 @@ class TransformsReader {
     pose.linear() = rotation;
     pose.translation() = m.topRightCorner<3, 1>();
     return pose;
+  }
+
+  // nerfstudio's ns-process-data maps COLMAP's poses into its own world frame (z up) and
+  // says how: "applied_transform" A (3x4, rigid) and optionally "applied_scale" s. The
+  // poses as written are A times COLMAP's, their positions then scaled by s (nerfstudio
+  // maps COLMAP's point cloud by s A to match). glaze takes "object" and "environment" in
+  // the original frame (COLMAP's, where a user measures what the reconstruction shows),
+  // and so undoes the transform on the poses.
+  struct AppliedTransform {
+    Eigen::Affine3f transform = Eigen::Affine3f::Identity();
+    float scale = 1.0f;
+    Eigen::Affine3f undo(Eigen::Affine3f pose) const {
+      pose.translation() /= scale;
+      return transform.inverse() * pose;
+    }
+  };
+  AppliedTransform applied_transform() const {
+    AppliedTransform applied;
+    if (root_.contains("applied_transform")) {
+      const json& rows = root_.at("applied_transform");
+      const std::string where = file_ + ": \"applied_transform\"";
+      if (!rows.is_array() || (rows.size() != 3 && rows.size() != 4))
+        fail(where,
+             "must be 3 rows of 4 numbers (the rigid transform applied to the poses), not " + json_excerpt(rows));
+      Eigen::Matrix<float, 3, 4> m;
+      for (int r = 0; r < 3; ++r) {
+        const std::vector<float> row = numbers(rows[r], 4, where, "row " + std::to_string(r), kCoordinate);
+        for (int c = 0; c < 4; ++c) m(r, c) = row[c];
+      }
+      const Mat3 rotation = m.leftCols<3>();
+      const float deviation = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+      if (deviation > 1e-3f || rotation.determinant() <= 0.0f)
+        fail(where, "its left 3x3 is not a rotation (R^T R differs from I by up to " + std::to_string(deviation) +
+                        "); nerfstudio writes a rotation and translation here");
+      applied.transform.linear() = rotation;
+      applied.transform.translation() = m.col(3);
+    }
+    if (root_.contains("applied_scale"))
+      applied.scale = number(root_.at("applied_scale"), file_, "applied_scale", kPositive);
+    return applied;
   }
 
   CaptureObject object() const {

@@ -19,7 +19,11 @@
 // Relative paths are relative to the directory holding transforms.json. A per-frame
 // intrinsic overrides the top-level one. "camera_model" is PINHOLE or SIMPLE_PINHOLE (no
 // distortion), OPENCV (k1 k2 p1 p2, optional k3) or OPENCV_FISHEYE (k1..k4), the lens
-// models of lens_distortion.h; without it, distortion coefficients mean OPENCV.
+// models of lens_distortion.h; without it, distortion coefficients mean OPENCV. Read as
+// other tools write them too: Blender's "camera_angle_x"/"camera_angle_y" (w, h from the
+// image when absent), a "file_path" without an extension (+ ".png"), nerfstudio's
+// "applied_transform"/"applied_scale" (undone on the poses: "object" and "environment"
+// are in the original frame).
 #pragma once
 
 #include "renderer/camera.h"

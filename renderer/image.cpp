@@ -25,6 +25,15 @@ float srgb_to_linear(float encoded) {
   return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
 }
 
+int Image::code(float value) const {
+  const float encoded = source_srgb ? linear_to_srgb(value) : value;
+  return int(std::lround(std::clamp(encoded, 0.0f, 1.0f) * float(max_code())));
+}
+
+float linear_to_srgb(float linear) {
+  return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
+}
+
 namespace {
 
 // Refuses an image with no pixels or more than glaze accepts, and checks that decoding
@@ -69,6 +78,11 @@ Image decode(OIIO::ImageInput& input, const std::string& name, std::vector<float
   const bool srgb_encoded = integer_format && !OIIO::Strutil::iequals(color_space, "linear");
 
   Image image(spec.width, spec.height);
+  if (integer_format) {
+    image.source_bits = int(spec.format.size()) * 8;
+    image.source_srgb = srgb_encoded;
+    image.source_lossy = std::string(input.format_name()) == "jpeg";
+  }
   const size_t count = size_t(spec.width) * spec.height;
   for (size_t i = 0; i < count; ++i) {
     for (int c = 0; c < 3; ++c) {
@@ -243,6 +257,11 @@ void write_picture(const std::string& path, int width, int height, std::span<con
 
 std::string image_attribute(const std::string& path, const std::string& key) {
   return open_input(path, Readers::kGlaze, "")->spec().get_string_attribute(key);
+}
+
+ImageSize image_size(const std::string& path) {
+  const OIIO::ImageSpec spec = open_input(path, Readers::kGlaze, "")->spec();
+  return {spec.width, spec.height};
 }
 
 }  // namespace glaze

@@ -23,6 +23,17 @@ struct Image {
   int width = 0;
   int height = 0;
   std::vector<float> pixels;  // width * height * 3
+  // What the file stored, for data that the decoded values cannot tell about: integer
+  // codes clip at the top of their range and quantise (8 bits: steps of a few percent).
+  int source_bits = 0;        // bits per channel of an integer file (8, 16); 0: float data
+  bool source_srgb = false;   // integer codes were sRGB-encoded (decoded to linear above)
+  bool source_lossy = false;  // JPEG: codes carry compression artefacts beside edges and clipping
+
+  // The integer code that decoded to `value` (one of this image's pixel values), for an
+  // integer source (source_bits > 0).
+  int code(float value) const;
+  // The largest code of an integer source: 2^source_bits - 1.
+  int max_code() const { return (1 << source_bits) - 1; }
 
   Image() = default;
   Image(int w, int h) : width(w), height(h), pixels(size_t(w) * size_t(h) * 3, 0.0f) {}
@@ -49,6 +60,8 @@ Image read_image_from_memory(const unsigned char* bytes, size_t size, const std:
 
 // The sRGB transfer function's inverse (IEC 61966-2-1), for 8- and 16-bit images.
 float srgb_to_linear(float encoded);
+// The sRGB transfer function (linear to encoded, both in [0, 1]).
+float linear_to_srgb(float linear);
 
 // The string metadata attribute `key` of the image file `path` (its header only), or ""
 // when it has none. Throws glaze::Error when the file cannot be opened as an image.
@@ -76,6 +89,13 @@ PhotoCodes read_photo_codes(const std::string& path);
 // is parsed. Camera raw is accepted as by read_photo_codes. Throws glaze::Error when
 // the file cannot be opened as an image.
 std::optional<double> photo_number_attribute(const std::string& path, const std::string& key);
+
+// The width and height of the image file `path`, from its header (the pixels are not
+// read). Throws glaze::Error when the file cannot be opened as an image.
+struct ImageSize {
+  int width = 0, height = 0;
+};
+ImageSize image_size(const std::string& path);
 
 // Writes `image` (format from the extension; .exr is written as float) with string
 // metadata attributes, atomically. Throws glaze::Error on failure.
