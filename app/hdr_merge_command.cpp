@@ -4,7 +4,7 @@
 // photos are linear. Writes NAME.exr per bracket (R, G, B and A: 0 where saturated in
 // every exposure), response.json and response.png, and last hdr_merge.json.
 #include "app/commands.h"
-#include "app/plot.h"
+#include "app/photo_outputs.h"
 #include "app/shared_options.h"
 #include "app/timing.h"
 #include "inverse/photos/bracket.h"
@@ -37,28 +37,6 @@ struct HdrMergeOptions {
   int threads = 0;
 };
 
-std::string percent(double fraction) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3f%%", 100.0 * fraction);
-  return text;
-}
-
-// The response curve as a chart: normalised code against relative exposure, log-log.
-void plot_response(const std::string& path, const CameraResponse& response) {
-  LogLogPlot plot{"camera response (" + method_name(response.method) + ")", "relative exposure", "code / 255", {}, {}};
-  const RGB colours[3] = {RGB(0.85f, 0.1f, 0.1f), RGB(0.1f, 0.6f, 0.1f), RGB(0.1f, 0.2f, 0.85f)};
-  const char* names[3] = {"R", "G", "B"};
-  for (int c = 0; c < 3; ++c) {
-    PlotSeries series{names[c], {}, {}, colours[c], false};
-    for (int z = response.well_constrained[c][0]; z <= response.well_constrained[c][1]; ++z) {
-      series.x.push_back(std::exp(response.log_exposure[c][z]));
-      series.y.push_back(z / 255.0);
-    }
-    plot.series.push_back(series);
-  }
-  write_loglog_plot(path, plot);
-}
-
 int hdr_merge(const HdrMergeOptions& args) {
   std::vector<Bracket> brackets;
   std::set<std::string> names;
@@ -72,72 +50,11 @@ int hdr_merge(const HdrMergeOptions& args) {
   OutputFolder out(args.out, "hdr_merge.json", "HDR output");
   const auto start = Clock::now();
 
-  // The response: read, linear (16-bit and raw photos), or recovered from samples of
-  // every bracket. The last bracket decoded stays decoded, to be merged first.
-  std::optional<CameraResponse> response;
-  if (args.response) response = read_response(*args.response);
-  std::optional<BracketPhotos> decoded;
-  std::vector<ResponseSamples> samples;
-  for (size_t k = 0; k < brackets.size() && !response; ++k) {
-    const Bracket& bracket = brackets[k];
-    std::cerr << "reading " << bracket.folder.string() << " (" << bracket.exposures.size() << " exposures, "
-              << bracket.exposures.front().exposure << " to " << bracket.exposures.back().exposure << " s)\n";
-    decoded = read_bracket(bracket);
-    const PhotoCodes& photo = decoded->photos.front();
-    if (!photo.linear) {
-      samples.push_back(sample_bracket(*decoded));
-      continue;
-    }
-    if (!samples.empty())
-      throw Error(bracket.folder.string() + ": holds linear " + std::to_string(photo.bits) +
-                  "-bit photos, the brackets before it 8-bit ones; merge them separately");
-    response = linear_response(photo.bits);  // merge_bracket refuses a bracket stored otherwise
-  }
-  if (!response) {
-    response = recover_response(samples);
-    std::cerr << "camera response recovered (Debevec and Malik) from " << response->samples << " sample pixels of "
-              << samples.size() << " bracket(s); well constrained from code " << response->well_constrained[1][0]
-              << " to " << response->well_constrained[1][1] << " (green)\n";
-  }
-
-  nlohmann::json report = {{"response", response_json(*response)}, {"brackets", nlohmann::json::array()}};
-  if (response->method != ResponseMethod::kLinear) {
-    out.write_text("response.json", response_json(*response).dump(2) + "\n");
-    plot_response(out.file("response.png").string(), *response);
-    report["response_file"] = "response.json";
-  }
-  for (size_t k = brackets.size(); k-- > 0;) {  // the last first: it may be decoded already
-    const Bracket& bracket = brackets[k];
-    BracketPhotos photos =
-        decoded && decoded->bracket.folder == bracket.folder ? std::move(*decoded) : read_bracket(bracket);
-    decoded.reset();
-    const std::vector<ExposureShift> shifts = bracket_shifts(photos, *response);
-    warn_misaligned(photos, shifts);
-    const HdrMerge merge = merge_bracket(photos, *response);
-    warn_coverage(bracket, merge);
-    nlohmann::json exposures = nlohmann::json::array();
-    for (size_t j = 0; j < bracket.exposures.size(); ++j)
-      exposures.push_back({{"file", bracket.exposures[j].file.string()},
-                           {"exposure", bracket.exposures[j].exposure},
-                           {"shift", {shifts[j].dx, shifts[j].dy}}});
-    const std::string file = bracket.name() + ".exr";
-    out.write_image(file, merge.radiance,
-                    {{"glaze:saturated_fraction", std::to_string(merge.saturated_fraction())},
-                     {"glaze:underexposed_fraction", std::to_string(merge.underexposed_fraction())},
-                     {"glaze:response", method_name(response->method)},
-                     {"glaze:exposures", std::to_string(bracket.exposures.size())}},
-                    merge.alpha);
-    report["brackets"].push_back({{"name", bracket.name()},
-                                  {"folder", bracket.folder.string()},
-                                  {"image", file},
-                                  {"exposures", exposures},
-                                  {"saturated_fraction", merge.saturated_fraction()},
-                                  {"underexposed_fraction", merge.underexposed_fraction()}});
-    std::cerr << bracket.name() << ": " << bracket.exposures.size() << " exposures merged, "
-              << percent(merge.saturated_fraction()) << " saturated in every exposure (alpha 0), "
-              << percent(merge.underexposed_fraction()) << " underexposed in every exposure -> "
-              << out.file(file).string() << "\n";
-  }
+  const CameraResponse response = bracket_response(brackets, args.response);
+  nlohmann::json report = {{"response", response_json(response)}, {"brackets", nlohmann::json::array()}};
+  write_response(out, response, report);
+  for (const Bracket& bracket : brackets)
+    report["brackets"].push_back(write_merged(out, bracket, read_and_merge(bracket, response), response));
   report["run"] = out.run();
   out.finish(report.dump(2) + "\n");
   std::cerr << "wrote " << brackets.size() << " HDR image(s) and hdr_merge.json to " << args.out << " ("

@@ -100,12 +100,16 @@ nlohmann::json drops_json(const DropCounts& d) {
 }
 
 FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds) {
+  return prepare_inputs(read_transforms(args.captures), args.samples, stage_seconds);
+}
+
+FitInputs prepare_inputs(CaptureSet captures, const SampleOptions& options, nlohmann::json& stage_seconds) {
   FitInputs in;
-  in.captures = read_transforms(args.captures);
+  in.captures = std::move(captures);
   in.scene = capture_object_scene(in.captures, PolishedMaterial(0.04f, RGB::Constant(0.5f)));
   in.tracer = std::make_unique<RayTracer>(in.scene);
   const auto stage = Clock::now();
-  in.samples = collect_samples(in.captures, *in.tracer, in.scene, args.samples);
+  in.samples = collect_samples(in.captures, *in.tracer, in.scene, options);
   stage_seconds["samples"] = seconds_since(stage);
   const DropCounts dropped = in.samples.total_dropped();
   std::printf(

@@ -8,6 +8,8 @@
 #include "app/shared_options.h"
 #include "app/timing.h"
 #include "inverse/fit_progress.h"
+#include "inverse/joint_fit.h"
+#include "inverse/lighting_fit.h"
 #include "inverse/samples.h"
 #include "renderer/capture_set.h"
 #include "renderer/environment.h"
@@ -81,6 +83,22 @@ struct FitInputs {
   SampleSet samples;
 };
 FitInputs prepare_inputs(const InvertFitOptions& args, nlohmann::json& stage_seconds);
+// The same for a capture set already read or built in memory (its images on disk).
+FitInputs prepare_inputs(CaptureSet captures, const SampleOptions& options, nlohmann::json& stage_seconds);
+
+// What --mode lighting and joint solve: the options, with the defaults that match how
+// the captures were made, and the samples' lighting data.
+struct LightingProblem {
+  int lmax = 4, footprint = 4;
+  int diffuse_lmax = 4;       // the diffuse term is modelled up to this band
+  bool band_limited = false;  // the captures' diffuse term stops at lmax (sh captures)
+  LightingFitOptions options;
+  LightingData data;
+};
+LightingProblem lighting_problem(const InvertFitOptions& args, const FitInputs& in);
+// --mode joint's fit of `problem` (whose data its later passes replace).
+JointFit solve_joint(LightingProblem& problem, const SampleSet& samples, const InvertFitOptions& args,
+                     const FitObserver& observer = {});
 
 // Writes the solver's report, then fit.json (with the run's id, "run") last.
 void write_fit(OutputFolder& out, nlohmann::json& result, const std::string& solver_report);

@@ -56,22 +56,15 @@ PolishedMaterial known_material(const InvertFitOptions& args, const CaptureSet& 
 
 }  // namespace
 
-// --mode lighting: the lighting from an object of known material; --mode joint: the
-// material and the lighting together.
-int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out_folder, bool joint,
-                    FitPreview* preview) {
-  const auto start = Clock::now();
-  nlohmann::json stage_seconds;
-  FitInputs in = prepare_inputs(args, stage_seconds);
-  const int lmax = args.lmax.value_or(4);
-  const int footprint = args.pixel_footprint.value_or(capture_defaults(in.captures, 4).first);
-  LightingFitOptions options;
+LightingProblem lighting_problem(const InvertFitOptions& args, const FitInputs& in) {
+  LightingProblem problem;
+  problem.lmax = args.lmax.value_or(4);
+  problem.footprint = args.pixel_footprint.value_or(capture_defaults(in.captures, 4).first);
+  LightingFitOptions& options = problem.options;
   std::tie(options.width, options.height) = args.lighting_resolution.pair();
   options.ridge = args.ridge.value_or(float(options.ridge));
   std::tie(options.solve_width, options.solve_height) =
       args.solve_resolution.value_or(Resolution{options.solve_width, options.solve_height}).pair();
-
-  auto stage = Clock::now();
   // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact for
   // the fit's model when that is at most the fit's lmax. Other captures, or sh ones that
   // do not say their lmax, get a band above any fit's: on them a second pass models the
@@ -79,16 +72,39 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
   // but 0.4% of the kernel's L2 norm, as --mode material's.
   // (sh captures above the fit's lmax have their bands up to their own lmax only.)
   const int capture_lmax = capture_defaults(in.captures, kShMaxLmax + 1).second;
-  const bool band_limited = capture_lmax <= lmax;
-  const int diffuse_lmax = band_limited ? lmax : std::min(capture_lmax, args.diffuse_lmax);
-  LightingData data =
-      gather_lighting_data(in.samples, in.captures, *in.tracer, lmax, footprint, noise_free_captures(in.captures));
+  problem.band_limited = capture_lmax <= problem.lmax;
+  problem.diffuse_lmax = problem.band_limited ? problem.lmax : std::min(capture_lmax, args.diffuse_lmax);
+  problem.data = gather_lighting_data(in.samples, in.captures, *in.tracer, problem.lmax, problem.footprint,
+                                      noise_free_captures(in.captures));
+  return problem;
+}
+
+JointFit solve_joint(LightingProblem& problem, const SampleSet& samples, const InvertFitOptions& args,
+                     const FitObserver& observer) {
+  JointFitOptions joint_options;
+  joint_options.max_rounds = args.max_iterations.value_or(joint_options.max_rounds);
+  joint_options.max_passes = args.max_passes.value_or(joint_options.max_passes);
+  joint_options.band_limited_diffuse = problem.band_limited;
+  return fit_joint_full_band(problem.data, samples, problem.diffuse_lmax, problem.options, joint_options, observer);
+}
+
+// --mode lighting: the lighting from an object of known material; --mode joint: the
+// material and the lighting together.
+int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& out_folder, bool joint,
+                    FitPreview* preview) {
+  const auto start = Clock::now();
+  nlohmann::json stage_seconds;
+  FitInputs in = prepare_inputs(args, stage_seconds);
+  auto stage = Clock::now();
+  LightingProblem problem = lighting_problem(args, in);
+  const int lmax = problem.lmax, footprint = problem.footprint;
+  const LightingFitOptions& options = problem.options;
+  LightingData& data = problem.data;
   stage_seconds["gather"] = seconds_since(stage);
   begin_preview(preview, in, lmax, footprint);
   const FinishPreview finish_preview{preview};
   stage = Clock::now();
   std::optional<JointFit> joint_fit;
-  JointFitOptions joint_options;
   FitObserver observer;
   // The lighting at each iterate (one per round of the joint fit) is solved here, on the
   // fit's thread: the later passes of a full-band fit replace `data`, which the preview's
@@ -100,17 +116,12 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
       show_in_preview(
           preview, in.scene, it.R0, it.Rd, [lighting] { return lighting; }, iterate_label(it));
     };
-  if (joint) {
-    joint_options.max_rounds = args.max_iterations.value_or(joint_options.max_rounds);
-    joint_options.max_passes = args.max_passes.value_or(joint_options.max_passes);
-    joint_options.band_limited_diffuse = band_limited;
-    joint_fit = fit_joint_full_band(data, in.samples, diffuse_lmax, options, joint_options, observer);
-  }
+  if (joint) joint_fit = solve_joint(problem, in.samples, args, observer);
   const PolishedMaterial material =
       joint ? PolishedMaterial(joint_fit->R0, joint_fit->Rd) : known_material(args, in.captures);
   const LightingFit fit =
       joint ? joint_fit->lighting
-            : fit_lighting_full_band(data, in.samples, diffuse_lmax, material.R0(), material.Rd(), options);
+            : fit_lighting_full_band(data, in.samples, problem.diffuse_lmax, material.R0(), material.Rd(), options);
   stage_seconds["fit"] = seconds_since(stage);
   // Made before anything is written, so that a map the renderer refuses (a texel beyond
   // what float carries through a render, environment.h) leaves no lighting.exr. Shared
@@ -145,7 +156,7 @@ int invert_lighting(const InvertFitOptions& args, const std::filesystem::path& o
                            {"samples", in.samples.samples.size()},
                            {"dropped", drops_json(in.samples.total_dropped())},
                            {"pixel_footprint", footprint},
-                           {"band_limited_diffuse", band_limited},
+                           {"band_limited_diffuse", problem.band_limited},
                            {"diffuse_lmax", data.diffuse_lmax},
                            {"passes", joint                      ? joint_fit->passes
                                       : data.diffuse_lmax > lmax ? 2

@@ -4,6 +4,7 @@
 #include "renderer/error.h"
 #include "renderer/low_discrepancy.h"
 #include "renderer/memory_budget.h"
+#include "renderer/progress_bar.h"
 
 #include <tbb/parallel_for.h>
 
@@ -32,30 +33,6 @@ constexpr uint64_t kCameraCount = uint64_t(1) << 22;
 // Measured with /usr/bin/time -v (maximum resident size) for `glaze render` of
 // red_sphere_office at 2048x2048 against 256x256, 1 spp: 73 bytes.
 constexpr uint64_t kFilmBytesPerPixel = 80;
-
-class ProgressBar {
- public:
-  ProgressBar(bool enabled, int total) : enabled_(enabled), total_(total) {}
-  void advance() {
-    if (!enabled_) return;
-    const int done = ++done_;
-    const int percent = 100 * done / total_;
-    std::lock_guard lock(mutex_);
-    if (percent == shown_) return;
-    shown_ = percent;
-    const int bar = percent / 4;
-    std::fprintf(stderr, "\r[%.*s%*s] %3d%%", bar, "=========================", 25 - bar, "", percent);
-    if (done == total_) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-  }
-
- private:
-  bool enabled_;
-  int total_;
-  std::atomic<int> done_{0};
-  std::mutex mutex_;
-  int shown_ = -1;
-};
 
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <cstdio>
+#include <iostream>
 
 namespace glaze {
 namespace {
@@ -106,6 +107,40 @@ void warn_coverage(const Bracket& bracket, const HdrMerge& merge) {
          " of the pixels are underexposed in every exposure, even the longest (" + longest.file.filename().string() +
          ", " + seconds_text(longest.exposure) + " s): the bracket is too short for the shadows. Add an exposure " +
          "at least 2 stops longer (" + seconds_text(longest.exposure * 4) + " s or more)");
+}
+
+CameraResponse bracket_response(std::span<const Bracket> brackets, const std::optional<std::string>& response_file) {
+  if (response_file) return read_response(*response_file);
+  std::vector<ResponseSamples> samples;
+  for (const Bracket& bracket : brackets) {
+    std::cerr << "reading " << bracket.folder.string() << " (" << bracket.exposures.size() << " exposures, "
+              << bracket.exposures.front().exposure << " to " << bracket.exposures.back().exposure << " s)\n";
+    const BracketPhotos photos = read_bracket(bracket);
+    const PhotoCodes& photo = photos.photos.front();
+    if (!photo.linear) {
+      samples.push_back(sample_bracket(photos));
+      continue;
+    }
+    if (!samples.empty())
+      throw Error(bracket.folder.string() + ": holds linear " + std::to_string(photo.bits) +
+                  "-bit photos, the brackets before it 8-bit ones; merge them separately");
+    return linear_response(photo.bits);  // merge_bracket refuses a bracket stored otherwise
+  }
+  const CameraResponse response = recover_response(samples);
+  std::cerr << "camera response recovered (Debevec and Malik) from " << response.samples << " sample pixels of "
+            << samples.size() << " bracket(s); well constrained from code " << response.well_constrained[1][0] << " to "
+            << response.well_constrained[1][1] << " (green)\n";
+  return response;
+}
+
+MergedBracket read_and_merge(const Bracket& bracket, const CameraResponse& response) {
+  const BracketPhotos photos = read_bracket(bracket);
+  MergedBracket merged;
+  merged.shifts = bracket_shifts(photos, response);
+  warn_misaligned(photos, merged.shifts);
+  merged.merge = merge_bracket(photos, response);
+  warn_coverage(bracket, merged.merge);
+  return merged;
 }
 
 }  // namespace glaze

@@ -12,9 +12,13 @@
 #pragma once
 
 #include "inverse/photos/bracket.h"
+#include "inverse/photos/bracket_alignment.h"
 #include "inverse/photos/camera_response.h"
 #include "renderer/image.h"
 
+#include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 namespace glaze {
@@ -36,5 +40,20 @@ inline constexpr double kCoverageWarningFraction = 0.001;
 // Warns when more than kCoverageWarningFraction of the pixels are saturated in every
 // exposure, or underexposed in every exposure, saying how many and which exposure to add.
 void warn_coverage(const Bracket& bracket, const HdrMerge& merge);
+
+// The response that merges `brackets`: read from `response_file` when given; linear for
+// 16-bit and raw photos; else recovered (Debevec and Malik) from samples of every bracket
+// at once, so that all of a shoot's HDR images share one curve and one unit. Reports on
+// stderr what it reads. Throws glaze::Error for brackets that mix 8-bit and linear photos.
+CameraResponse bracket_response(std::span<const Bracket> brackets, const std::optional<std::string>& response_file);
+
+struct MergedBracket {
+  HdrMerge merge;
+  std::vector<ExposureShift> shifts;  // each exposure's offset from the first (bracket_alignment.h)
+};
+
+// Reads `bracket`, warns when the camera moved between its exposures or when it is too
+// short at either end (warn_coverage), and merges it with `response`.
+MergedBracket read_and_merge(const Bracket& bracket, const CameraResponse& response);
 
 }  // namespace glaze
