@@ -1,4 +1,4 @@
-// shoot.cpp: shoot.json's "board" and "camera", and the photos of a shoot's folders.
+// shoot.cpp: shoot.json, and the photos of a shoot's folders.
 #include "inverse/photos/shoot.h"
 
 #include "renderer/error.h"
@@ -109,6 +109,64 @@ CameraIntrinsics read_camera(const json& camera, const std::string& file) {
   return intrinsics;
 }
 
+const char* const kObjectHelp =
+    "{\"type\": \"sphere\"} (locate it), {\"type\": \"sphere\", \"center\": [x, y, z], \"radius\": r} "
+    "(board coordinates, metres) or {\"gltf\": FILE} (already in board coordinates)";
+
+ShootObject read_object(const json& object, const fs::path& folder, const std::string& file) {
+  if (!object.is_object()) fail(file, "object", std::string("must be an object: ") + kObjectHelp);
+  ShootObject result;
+  if (object.contains("gltf")) {
+    check_keys(object, {"gltf"}, file, "object", kObjectHelp);
+    const json& gltf = object.at("gltf");
+    if (!gltf.is_string() || gltf.get<std::string>().empty())
+      fail(file, "object.gltf", "must be a file name, not " + json_excerpt(gltf));
+    result.kind = ShootObject::Kind::gltf;
+    result.gltf = folder / gltf.get<std::string>();
+    return result;
+  }
+  check_keys(object, {"type", "center", "radius"}, file, "object", kObjectHelp);
+  if (!object.contains("type") || object.at("type") != "sphere")
+    fail(file, "object.type", std::string("must be \"sphere\" (or give \"gltf\"): ") + kObjectHelp);
+  const bool center = object.contains("center"), radius = object.contains("radius");
+  if (center != radius)
+    fail(file, center ? "object.radius" : "object.center",
+         "is missing: give both the centre and the radius, or neither to locate the sphere from its outline");
+  if (!center) return result;
+  const json& c = object.at("center");
+  if (!c.is_array() || c.size() != 3 ||
+      !std::all_of(c.begin(), c.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
+    fail(file, "object.center", "must be [x, y, z] in metres (board coordinates), not " + json_excerpt(c));
+  result.kind = ShootObject::Kind::sphere;
+  for (int i = 0; i < 3; ++i) result.center[i] = c[i].get<double>();
+  result.radius = positive_number(object, "radius", file, "object");
+  return result;
+}
+
+ShootProbe read_probe(const json& probe, const std::string& file) {
+  const std::string help = "{\"radius\": metres, \"reflectance\": x or [r, g, b]}, each optional";
+  if (!probe.is_object()) fail(file, "probe", "must be an object " + help);
+  check_keys(probe, {"radius", "reflectance"}, file, "probe", help);
+  ShootProbe result;
+  if (probe.contains("radius")) result.radius = positive_number(probe, "radius", file, "probe");
+  if (probe.contains("reflectance")) {
+    const json& value = probe.at("reflectance");
+    const auto fraction = [](const json& v) {
+      return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() > 0.0 && v.get<double>() <= 1.0;
+    };
+    if (fraction(value)) {
+      result.reflectance = {value.get<double>(), value.get<double>(), value.get<double>()};
+    } else if (value.is_array() && value.size() == 3 && std::all_of(value.begin(), value.end(), fraction)) {
+      result.reflectance = {value[0].get<double>(), value[1].get<double>(), value[2].get<double>()};
+    } else {
+      fail(file, "probe.reflectance",
+           "must be the ball's reflectance in (0, 1], one number or [r, g, b], not " + json_excerpt(value) +
+               "; leave it out to estimate it");
+    }
+  }
+  return result;
+}
+
 std::string lowercase(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
   return text;
@@ -154,6 +212,8 @@ Shoot read_shoot(const fs::path& path) {
                 std::string(root.type_name()));
   shoot.board = read_board(root, shoot.file);
   if (root.contains("camera")) shoot.camera = read_camera(root.at("camera"), shoot.file);
+  if (root.contains("object")) shoot.object = read_object(root.at("object"), shoot.folder, shoot.file);
+  if (root.contains("probe")) shoot.probe = read_probe(root.at("probe"), shoot.file);
   return shoot;
 }
 

@@ -1,15 +1,18 @@
-// shoot.h: a photo shoot as a folder (docs/design.md §7), read as far as the stages built
-// so far need it: shoot.json's "board" and "camera", and the board photos.
+// shoot.h: a photo shoot as a folder (docs/design.md §7): shoot.json, and the photos of
+// its folders.
 //
 //   SHOOT/shoot.json    {"board": {"inner_corners": [cols, rows], "square": metres},
+//                        "object": {"type": "sphere"} (locate it from its outline)
+//                                | {"type": "sphere", "center": [x, y, z], "radius": r} | {"gltf": FILE},
+//                        "probe": {"radius": r (optional), "reflectance": x or [r, g, b] (optional)},
 //                        "camera": {"fl_x": .., "fl_y": .., "cx": .., "cy": .., "k1": .., ...}}
 //   SHOOT/calibration/  optional: photos of the board in many poses
 //   SHOOT/view_NNN/     one tripod position each, with the board photo board.* ...
 //   SHOOT/probe_NNN/    ... and the same with the mirror ball
 //
 // "camera" (optional) gives known intrinsics in transforms.json's vocabulary and
-// convention (pixel centres at i + 0.5); the other keys of shoot.json belong to later
-// stages and are not read here.
+// convention (pixel centres at i + 0.5). "object" and "probe" are in board coordinates
+// (registration.h), metres; a glTF object's FILE is relative to the shoot's folder.
 #pragma once
 
 #include <array>
@@ -36,12 +39,29 @@ struct CameraIntrinsics {
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
 };
 
+// What was photographed ("object").
+struct ShootObject {
+  enum class Kind { locate_sphere, sphere, gltf };
+  Kind kind = Kind::locate_sphere;
+  std::array<double, 3> center{};  // sphere: given centre
+  double radius = 0.0;             // sphere: given radius
+  std::filesystem::path gltf;      // gltf: resolved against the shoot's folder
+};
+
+// The mirror ball of the probe_NNN folders ("probe"); unset values are estimated.
+struct ShootProbe {
+  std::optional<double> radius;
+  std::optional<std::array<double, 3>> reflectance;  // per channel, in (0, 1]
+};
+
 struct Shoot {
   std::filesystem::path folder;  // SHOOT
   std::string file;              // SHOOT/shoot.json, for messages
   BoardSpec board;
   // Known intrinsics ("camera"); width and height are 0 where not given (the photos have them).
   std::optional<CameraIntrinsics> camera;
+  std::optional<ShootObject> object;  // none: shoot.json has no "object"
+  ShootProbe probe;
 };
 
 // One place the camera stood: view_NNN or probe_NNN, and its board photo.
