@@ -344,7 +344,23 @@ TEST(ShootRegistration, MalformedShootJsonNamesTheKey) {
       {R"({"board": {"inner_corners": [9, 6], "square": 0.02},
            "camera": {"fl_x": 5, "cx": 1, "cy": 1, "k1": 0.1, "camera_model": "PINHOLE"}})",
        "\"camera.camera_model\""},
-      {R"([1, 2])", "the top level must be an object"}};
+      {R"([1, 2])", "the top level must be an object"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "object": {"type": "cube"}})",
+       "\"object.type\" must be \"sphere\""},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "object": {"type": "sphere", "center": [0, 0, 1]}})",
+       "\"object.radius\" is missing"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02},
+           "object": {"type": "sphere", "center": [0, 0], "radius": 0.05}})",
+       "\"object.center\" must be [x, y, z]"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "object": {"gltf": 3}})", "\"object.gltf\""},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"reflectance": 1.5}})",
+       "\"probe.reflectance\" must be the ball's reflectance in (0, 1]"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"reflectance": [0.5, 0.5]}})",
+       "\"probe.reflectance\""},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"radius": 0}})",
+       "\"probe.radius\" must be a positive number"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"diameter": 0.1}})",
+       "\"probe.diameter\" is not a key"}};
   for (const auto& [text, expected] : cases) {
     const std::string file = write_text(dir, "shoot.json", text);
     try {
@@ -359,6 +375,37 @@ TEST(ShootRegistration, MalformedShootJsonNamesTheKey) {
 }
 
 // A view folder without its board photo, or with two, is refused, naming the folder.
+// The object and the probe as shoot.json gives them, in board coordinates.
+TEST(ShootRegistration, ObjectAndProbeAreRead) {
+  TemporaryDirectory dir;
+  write_text(dir, "shoot.json", R"({"board": {"inner_corners": [9, 6], "square": 0.025}})");
+  Shoot shoot = read_shoot(dir.path());
+  EXPECT_FALSE(shoot.object);
+  EXPECT_FALSE(shoot.probe.radius);
+  EXPECT_FALSE(shoot.probe.reflectance);
+  write_text(dir, "shoot.json", R"({"board": {"inner_corners": [9, 6], "square": 0.025}, "object": {"type": "sphere"},
+                                    "probe": {"reflectance": 0.6}})");
+  shoot = read_shoot(dir.path());
+  ASSERT_TRUE(shoot.object);
+  EXPECT_EQ(shoot.object->kind, ShootObject::Kind::locate_sphere);
+  ASSERT_TRUE(shoot.probe.reflectance);
+  EXPECT_EQ(*shoot.probe.reflectance, (std::array<double, 3>{0.6, 0.6, 0.6}));
+  write_text(dir, "shoot.json", R"({"board": {"inner_corners": [9, 6], "square": 0.025},
+                                    "object": {"type": "sphere", "center": [0.1, 0.075, 0.05], "radius": 0.05},
+                                    "probe": {"radius": 0.0375, "reflectance": [0.55, 0.6, 0.65]}})");
+  shoot = read_shoot(dir.path());
+  EXPECT_EQ(shoot.object->kind, ShootObject::Kind::sphere);
+  EXPECT_EQ(shoot.object->center, (std::array<double, 3>{0.1, 0.075, 0.05}));
+  EXPECT_EQ(shoot.object->radius, 0.05);
+  EXPECT_EQ(shoot.probe.radius, 0.0375);
+  EXPECT_EQ(*shoot.probe.reflectance, (std::array<double, 3>{0.55, 0.6, 0.65}));
+  write_text(dir, "shoot.json",
+             R"({"board": {"inner_corners": [9, 6], "square": 0.025}, "object": {"gltf": "a.glb"}})");
+  shoot = read_shoot(dir.path());
+  EXPECT_EQ(shoot.object->kind, ShootObject::Kind::gltf);
+  EXPECT_EQ(shoot.object->gltf, dir.path() / "a.glb");
+}
+
 TEST(ShootRegistration, EachViewNeedsOneBoardPhoto) {
   TemporaryDirectory dir;
   write_text(dir, "shoot.json", R"({"board": {"inner_corners": [9, 6], "square": 0.025}})");
