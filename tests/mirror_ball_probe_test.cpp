@@ -340,5 +340,34 @@ TEST(MirrorBallProbe, ReflectanceRatioRecoversKnownFactor) {
   EXPECT_THROW(reflectance_ratio(probe, {}, Image(32, 16), {}), Error);
 }
 
+// The lead's reflectance estimate end to end: a probe built with reflectance 1 from photos
+// of a 0.6 ball, against the true lighting as a capture set holds it (lat-long in the
+// board's frame, +Y along the board's y), resampled into the probe's frame.
+TEST(MirrorBallProbe, ReflectanceFromProbeAgainstLightingInBoardFrame) {
+  EnvironmentOptions frame;
+  frame.to_world = probe_to_board();
+  const Environment office = make_environment("procedural:office", frame, 256, 128);
+  MirrorBallProbeOptions options;
+  options.width = 64, options.height = 32;
+  const MirrorBallProbe probe = build_mirror_ball_probe(ball_photos(office, RGB::Constant(0.6f)), kBall, options);
+  // The same lighting in the board's own frame (to_world identity), 128x64.
+  const Environment board(Image(128, 64), {}, "board frame");
+  Image in_board(128, 64);
+  std::vector<float> known(128 * 64, 1.0f);
+  for (int j = 0; j < 64; ++j)
+    for (int i = 0; i < 128; ++i) {
+      in_board.set(i, j, office.eval(board.uv_to_direction(Vec2((i + 0.5f) / 128, (j + 0.5f) / 64))));
+      if (j >= 56) known[size_t(j) * 128 + i] = 0.0f;  // the board's -Y pole unknown
+    }
+  const LatlongResample resampled = resample_into_probe_frame(in_board, known, Mat3::Identity(), 64, 32);
+  const size_t unknown = std::count(resampled.covered.begin(), resampled.covered.end(), 0.0f);
+  EXPECT_GT(unknown, 0u);
+  EXPECT_LT(unknown, 64u * 32u / 4);
+  const ReflectanceRatio ratio = reflectance_ratio(probe.map, probe.covered, resampled.map, resampled.covered);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(ratio.reflectance[c], 0.6, 0.003) << c;
+  std::cout << "reflectance " << ratio.reflectance.transpose() << " over " << ratio.texels << " texels, relative RMS "
+            << ratio.relative_rms.transpose() << "\n";
+}
+
 }  // namespace
 }  // namespace glaze

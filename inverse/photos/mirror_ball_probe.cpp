@@ -320,6 +320,38 @@ ProbeFiles write_mirror_ball_probe(OutputFolder& out, const MirrorBallProbe& pro
   return files;
 }
 
+LatlongResample resample_into_probe_frame(const Image& map, const std::vector<float>& covered, const Mat3& to_world,
+                                          int width, int height) {
+  if (map.width <= 0 || map.height <= 0 || width <= 0 || height <= 0)
+    throw Error("resampling a lighting map into the probe's frame: empty map or resolution");
+  if (!covered.empty() && covered.size() != size_t(map.width) * map.height)
+    throw Error("resampling a lighting map into the probe's frame: its coverage does not match its size");
+  const int n = std::max({1, (map.width + width - 1) / width, (map.height + height - 1) / height});
+  // Probe frame -> the map's frame.
+  const Mat3 probe_to_map = to_world.transpose() * probe_to_board();
+  LatlongResample out{Image(width, height), std::vector<float>(size_t(width) * height, 1.0f)};
+  tbb::parallel_for(0, height, [&](int j) {
+    for (int i = 0; i < width; ++i) {
+      RGBd sum = RGBd::Zero();
+      double area = 0.0;
+      bool known = true;
+      for (int sj = 0; sj < n; ++sj)
+        for (int si = 0; si < n; ++si) {
+          float sin_theta = 0.0f;
+          const Vec2 uv((i + (si + 0.5f) / n) / width, (j + (sj + 0.5f) / n) / height);
+          const Vec2 source = direction_to_latlong(probe_to_map * latlong_to_direction(uv, &sin_theta));
+          sum += sin_theta * bilinear(map, bilinear_footprint(source, map.width, map.height, Wrap::repeat, Wrap::clamp))
+                                 .cast<double>();
+          area += sin_theta;
+          if (!covered.empty()) known = known && covered[texel_of(source, map.width, map.height)] > 0.0f;
+        }
+      out.map.set(i, j, (sum / area).cast<float>());
+      out.covered[size_t(j) * width + i] = known ? 1.0f : 0.0f;
+    }
+  });
+  return out;
+}
+
 ReflectanceRatio reflectance_ratio(const Image& probe, const std::vector<float>& probe_covered, const Image& absolute,
                                    const std::vector<float>& absolute_covered) {
   const size_t texels = size_t(probe.width) * probe.height;

@@ -100,6 +100,18 @@ struct ProbeFiles {
 ProbeFiles write_mirror_ball_probe(OutputFolder& out, const MirrorBallProbe& probe,
                                    const std::string& map_name = "env.exr", const std::string& mask_name = "mask.png");
 
+// A lat-long `map` whose frame `to_world` takes to the board's (a capture set's world frame:
+// Mat3::Identity()), with its coverage (1 = known; empty: all), resampled onto the texels
+// of a width x height map in the probe's frame: each texel the mean of the bilinear
+// lookups at n x n directions in it (n enough to reach every texel of a finer source),
+// known where all of them fall in known texels.
+struct LatlongResample {
+  Image map;
+  std::vector<float> covered;
+};
+LatlongResample resample_into_probe_frame(const Image& map, const std::vector<float>& covered, const Mat3& to_world,
+                                          int width, int height);
+
 // The ball's reflectance from the probe made with reflectance 1 (radiance times the
 // reflectance) and an estimate of the lighting at absolute scale on the same texels (same
 // size and frame, e.g. a joint fit's map resampled into the probe's frame), each with its
