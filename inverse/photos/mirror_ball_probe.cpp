@@ -96,7 +96,7 @@ struct ViewGeometry {
 // The camera-space point of world point p, in the camera's float type.
 Vec3 to_camera(const ViewGeometry& g, const Vec3d& p) { return (g.world_to_camera * p).cast<float>(); }
 
-// One view's weighted radiance for board direction d: weight 0 when it is not seen.
+// What one view saw in board direction d, and its weight: 0 when it did not see it.
 struct ViewSample {
   double weight = 0.0;
   RGB radiance = RGB::Zero();
@@ -148,9 +148,11 @@ void check_inputs(const std::vector<ProbeView>& views, const MirrorBall& ball, c
   if (!(ball.radius > 0.0 && std::isfinite(ball.radius) && ball.center.allFinite()))
     throw Error("the mirror ball's radius must be positive and its centre finite (radius " +
                 std::to_string(ball.radius) + ")");
-  if (options.width < 2 || options.height < 1 || options.samples_per_side < 0)
+  if (options.width < 2 || options.height < 1)
     throw Error("the light probe's resolution must be at least 2x1 (got " + std::to_string(options.width) + "x" +
                 std::to_string(options.height) + ")");
+  if (options.samples_per_side < 0)
+    throw Error("the light probe's directions per texel side must be 0 (automatic) or more");
   if (!(options.reflectance > 0.0f).all() || !options.reflectance.isFinite().all())
     throw Error("the mirror ball's reflectance must be positive in every channel");
   for (const ProbeView& view : views) {

@@ -51,8 +51,8 @@ struct MirrorBallProbeOptions {
   // pixels blur with the background.
   double rim_margin_px = 2.0;
   // The camera and its tripod: a capsule of this radius (metres) around the camera's
-  // centre and the vertical line below it, down to `tripod_depth_m` under the ball's
-  // centre. A reflected ray that passes through it sees them, and is left out.
+  // centre and the vertical line below it (the board's -z: the board lies flat), down to
+  // `tripod_depth_m` under the ball's centre. A reflected ray that passes through it sees them, and is left out.
   double camera_radius_m = 0.1;
   double tripod_depth_m = 2.0;
 };
@@ -67,8 +67,10 @@ struct ProbeViewContribution {
 struct MirrorBallProbe {
   Image map;                         // lat-long, radiance over the reflectance, map frame
   Mat3 to_world = Mat3::Identity();  // map frame -> board frame (probe_to_board())
-  std::vector<float> covered;        // per texel (row-major): 1 if a view saw it, 0 where filled in
-  double covered_fraction = 0.0;     // of the sphere's solid angle
+  // Per texel (row-major): 1 if a view saw it, 0 where filled in (no view saw it, or every
+  // view that did saw it saturated in some direction of the texel: a lower bound).
+  std::vector<float> covered;
+  double covered_fraction = 0.0;  // of the sphere's solid angle
   std::vector<ProbeViewContribution> views;
 };
 
