@@ -14,48 +14,61 @@
 namespace glaze {
 namespace {
 
-// What the outline is looked for in: the view's luminance (or its mask), blurred, with
-// the pixels near a saturated one marked unusable. Edges are found and weighed on its log
-// (their strength is their contrast, whatever the exposure), and placed on the linear
-// values, where a pixel straddling the outline mixes the two sides in proportion to
-// their areas.
+// What the outline is looked for in: the view's colour channels (or its mask), blurred,
+// with the pixels near a saturated one marked unusable. Edges are found and weighed on
+// their log (an edge's strength is its contrast, whatever the exposure), in the channel
+// where the sphere and the background differ most (a red sphere before a grey wall of
+// its luminance), and placed on the linear values, where a pixel straddling the outline
+// mixes the two sides in proportion to their areas.
 class EdgeImage {
  public:
   EdgeImage(const SphereView& view, double blur) : width_(view.image.width), height_(view.image.height) {
     const size_t count = size_t(width_) * size_t(height_);
-    cv::Mat linear(height_, width_, CV_32F), unusable(height_, width_, CV_8U, cv::Scalar(0));
-    float floor = std::numeric_limits<float>::min();
+    const int channels = view.mask.empty() ? 3 : 1;
+    std::vector<cv::Mat> linear(channels);
+    cv::Mat luminance(height_, width_, CV_32F), unusable(height_, width_, CV_8U, cv::Scalar(0));
+    for (cv::Mat& channel : linear) channel.create(height_, width_, CV_32F);
     if (!view.mask.empty()) {
-      mask_ = true;
-      for (size_t i = 0; i < count; ++i) linear.at<float>(int(i)) = view.mask[i] > 0.5f ? 1.0f : 1e-2f;
+      for (size_t i = 0; i < count; ++i) linear[0].at<float>(int(i)) = view.mask[i] > 0.5f ? 1.0f : 1e-2f;
+      luminance = linear[0].clone();
     } else {
       for (size_t i = 0; i < count; ++i) {
         const float* p = &view.image.pixels[3 * i];
-        const float l = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
-        linear.at<float>(int(i)) = std::isfinite(l) ? std::max(l, 0.0f) : 0.0f;
+        for (int c = 0; c < 3; ++c) linear[c].at<float>(int(i)) = std::isfinite(p[c]) ? std::max(p[c], 0.0f) : 0.0f;
+        luminance.at<float>(int(i)) = 0.2126f * linear[0].at<float>(int(i)) + 0.7152f * linear[1].at<float>(int(i)) +
+                                      0.0722f * linear[2].at<float>(int(i));
         unusable.at<uint8_t>(int(i)) = !view.alpha.empty() && view.alpha[i] <= 0.0f;
       }
-      // Black pixels (underexposed in every exposure) are floored at a thousandth of the
-      // median, so that their log stays finite and their noise does not make edges.
-      std::vector<float> sorted(linear.begin<float>(), linear.end<float>());
-      std::nth_element(sorted.begin(), sorted.begin() + count / 2, sorted.end());
-      floor = std::max(1e-3f * sorted[count / 2], floor);
     }
-    cv::GaussianBlur(linear, linear_, cv::Size(0, 0), blur);
-    cv::max(linear_, floor, log_);
-    cv::log(log_, log_);
+    // Black pixels (underexposed in every exposure) are floored at a thousandth of the
+    // median luminance, so that their log stays finite and their noise makes no edges.
+    std::vector<float> sorted(luminance.begin<float>(), luminance.end<float>());
+    std::nth_element(sorted.begin(), sorted.begin() + count / 2, sorted.end());
+    const float floor = std::max(1e-3f * sorted[count / 2], std::numeric_limits<float>::min());
+    const auto blurred_log = [&](const cv::Mat& values, cv::Mat& blurred, cv::Mat& log) {
+      cv::GaussianBlur(values, blurred, cv::Size(0, 0), blur);
+      cv::max(blurred, floor, log);
+      cv::log(log, log);
+    };
+    linear_.resize(channels);
+    log_.resize(channels);
+    for (int c = 0; c < channels; ++c) blurred_log(linear[c], linear_[c], log_[c]);
+    cv::Mat unused;
+    blurred_log(luminance, unused, log_luminance_);
     cv::dilate(unusable, unusable_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
   }
 
-  bool is_mask() const { return mask_; }
+  bool is_mask() const { return linear_.size() == 1; }
+  int channels() const { return int(linear_.size()); }
   int width() const { return width_; }
   int height() const { return height_; }
-  const cv::Mat& log_values() const { return log_; }
+  const cv::Mat& log_luminance() const { return log_luminance_; }
 
-  // The blurred log (or linear) value at film point (x, y) (pixel (i, j) has its centre at
-  // (i + 0.5, j + 0.5)), bilinear; nothing off the image or near a saturated pixel.
-  std::optional<double> log_at(const Vec2d& p) const { return at(log_, p); }
-  std::optional<double> linear_at(const Vec2d& p) const { return at(linear_, p); }
+  // The blurred log (or linear) value of `channel` at film point (x, y) (pixel (i, j) has
+  // its centre at (i + 0.5, j + 0.5)), bilinear; nothing off the image or near a
+  // saturated pixel.
+  std::optional<double> log_at(int channel, const Vec2d& p) const { return at(log_[channel], p); }
+  std::optional<double> linear_at(int channel, const Vec2d& p) const { return at(linear_[channel], p); }
 
  private:
   std::optional<double> at(const cv::Mat& image, const Vec2d& p) const {
@@ -69,27 +82,24 @@ class EdgeImage {
   }
 
   int width_, height_;
-  bool mask_ = false;
-  cv::Mat linear_, log_, unusable_;
+  std::vector<cv::Mat> linear_, log_;
+  cv::Mat log_luminance_, unusable_;
 };
 
-// Where the linear profile through film point `p` along `n` crosses halfway between its
-// levels `kSide` pixels to either side of offset `t` (for a mask; see below for an image):
-// the one nearest t, if any.
-std::optional<double> halfway_crossing(const EdgeImage& image, const Vec2d& p, const Vec2d& n, double t) {
-  constexpr double kSide = 2.0, kStep = 0.125;
-  const auto inside = image.linear_at(p + (t - kSide) * n), outside = image.linear_at(p + (t + kSide) * n);
+// Where the linear profile of `channel` through film point `p` along `n` crosses `level`
+// of the way from its level `kSide` pixels outside offset `t` to its level as far inside:
+// the crossing nearest t, if any.
+std::optional<double> level_crossing(const EdgeImage& image, int channel, const Vec2d& p, const Vec2d& n, double t,
+                                     double level) {
+  constexpr double kSide = 1.5, kStep = 0.125;
+  const auto inside = image.linear_at(channel, p + (t - kSide) * n),
+             outside = image.linear_at(channel, p + (t + kSide) * n);
   if (!inside || !outside) return std::nullopt;
-  // A mask's boundary is a step: halfway. A coated sphere's rim is not: at grazing angles
-  // its coat mirrors the background just behind it (the Fresnel factor tends to 1), and
-  // the sphere's own shade rises over a few pixels inside. The outline is where the
-  // profile starts to leave the background, nearer the outside level: 0.3 of the way, a
-  // level measured on renders (docs/notes/sphere-outline.md).
-  const double middle = *outside + (image.is_mask() ? 0.5 : 0.3) * (*inside - *outside);
+  const double middle = *outside + level * (*inside - *outside);
   std::optional<double> crossing;
   auto previous = inside;
   for (double s = t - kSide + kStep; s <= t + kSide + 1e-9; s += kStep) {
-    const auto value = image.linear_at(p + s * n);
+    const auto value = image.linear_at(channel, p + s * n);
     if (!value) return std::nullopt;
     if ((*previous - middle) * (*value - middle) <= 0.0 && *previous != *value) {
       const double at = s - kStep + kStep * (middle - *previous) / (*value - *previous);
@@ -102,25 +112,32 @@ std::optional<double> halfway_crossing(const EdgeImage& image, const Vec2d& p, c
 
 // The strongest edge across film point `p` along the unit normal `n`, within `reach`
 // pixels: its offset along n, or nothing where no step of at least `min_contrast` (log
-// luminance a pixel) is there. The log's steepest place finds it; the linear profile
-// places it at sub-pixel precision: where it crosses halfway between its levels on either
-// side, which is the outline for a pixel-averaged, blurred step.
+// a pixel) is there. The log's steepest place finds it; the linear profile of the channel
+// where it is steepest places it at sub-pixel precision: for a mask, where it crosses
+// halfway between its levels on either side, which is the outline of a pixel-averaged,
+// blurred step.
 std::optional<double> find_edge(const EdgeImage& image, const Vec2d& p, const Vec2d& n, double reach,
-                                double min_contrast) {
+                                const SphereOutlineOptions& options) {
   constexpr double h = 0.5;  // sample spacing, pixels; the derivative spans 2h = 1 pixel
   const int steps = int(std::ceil(reach / h));
   std::vector<double> slope(2 * steps + 1, 0.0);
-  for (int k = -steps; k <= steps; ++k) {
-    const auto a = image.log_at(p + (k * h - h) * n), b = image.log_at(p + (k * h + h) * n);
-    if (!a || !b) return std::nullopt;  // a profile cut by the image's edge or a saturated pixel
-    slope[k + steps] = std::abs(*b - *a) / (2 * h);
-  }
+  std::vector<int> channel(2 * steps + 1, 0);
+  for (int k = -steps; k <= steps; ++k)
+    for (int c = 0; c < image.channels(); ++c) {
+      const auto a = image.log_at(c, p + (k * h - h) * n), b = image.log_at(c, p + (k * h + h) * n);
+      if (!a || !b) return std::nullopt;  // a profile cut by the image's edge or a saturated pixel
+      const double step = std::abs(*b - *a) / (2 * h);
+      if (step > slope[k + steps]) slope[k + steps] = step, channel[k + steps] = c;
+    }
   const auto peak = std::max_element(slope.begin(), slope.end());
-  if (*peak < min_contrast) return std::nullopt;
+  if (*peak < options.min_contrast) return std::nullopt;
+  const int strongest = channel[peak - slope.begin()];
   // The levels are taken about the crossing found last, which starts at the log's peak:
   // that peak lies towards the darker side, where a pixel's log changes most.
   std::optional<double> crossing = double(peak - slope.begin() - steps) * h;
-  for (int pass = 0; pass < 3 && crossing; ++pass) crossing = halfway_crossing(image, p, n, *crossing);
+  // A mask's boundary is a step: halfway. A coated sphere's rim is none (rim_level).
+  const double level = image.is_mask() ? 0.5 : options.rim_level;
+  for (int pass = 0; pass < 3 && crossing; ++pass) crossing = level_crossing(image, strongest, p, n, *crossing, level);
   return crossing;
 }
 
@@ -204,7 +221,7 @@ std::optional<Sphere> intersect_cones(const Cone& a, const Cone& b) {
 std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
   const double scale = std::max(1.0, std::max(image.width(), image.height()) / 800.0);
   cv::Mat reduced;
-  cv::resize(image.log_values(), reduced,
+  cv::resize(image.log_luminance(), reduced,
              cv::Size(int(std::lround(image.width() / scale)), int(std::lround(image.height() / scale))), 0, 0,
              cv::INTER_AREA);
   std::vector<float> sorted(reduced.begin<float>(), reduced.end<float>());
@@ -223,12 +240,12 @@ std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
 
 // The fraction of the sphere's outline in `view` where an edge lies within `reach`.
 double outline_support(const EdgeImage& image, const PinholeCamera& camera, const Sphere& sphere, double reach,
-                       double min_contrast) {
+                       const SphereOutlineOptions& options) {
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, 64);
   if (samples.points.empty()) return 0.0;
   int found = 0;
   for (size_t k = 0; k < samples.points.size(); ++k)
-    found += find_edge(image, samples.points[k], samples.normals[k], reach, min_contrast).has_value();
+    found += find_edge(image, samples.points[k], samples.normals[k], reach, options).has_value();
   return double(found) / double(samples.points.size());
 }
 
@@ -266,7 +283,7 @@ ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, cons
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, options.outline_samples);
   edges.samples = int(samples.points.size());
   for (size_t k = 0; k < samples.points.size(); ++k) {
-    const auto offset = find_edge(image, samples.points[k], samples.normals[k], reach, options.min_contrast);
+    const auto offset = find_edge(image, samples.points[k], samples.normals[k], reach, options);
     if (!offset) continue;
     const Vec2d film = samples.points[k] + *offset * samples.normals[k];
     const auto [origin, direction] = film_ray(camera, film);
@@ -344,8 +361,7 @@ Sphere initial_sphere(const std::vector<SphereView>& views, const std::vector<Ed
           for (size_t v = 0; v < views.size(); ++v) {
             const double radius_px =
                 outline_radius_px(sphere_outline(views[v].camera, sphere->center, sphere->radius, 16));
-            score += outline_support(images[v], views[v].camera, *sphere, std::max(3.0, 0.1 * radius_px),
-                                     options.min_contrast);
+            score += outline_support(images[v], views[v].camera, *sphere, std::max(3.0, 0.1 * radius_px), options);
           }
           if (score > best_score) best_score = score, best = sphere;
         }

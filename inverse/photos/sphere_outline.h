@@ -8,10 +8,10 @@
 // sphere of the two views' cones that the other views' images support best, then a few
 // rounds of detect-and-fit: the outline edge looked for along the normals of the sphere's
 // projected outline at sub-pixel precision, and centre and radius by least squares over
-// the cones of all views (Ceres, a robust loss). Log luminance makes an edge's strength
-// its contrast, whatever the exposure; the edge looked for is the strongest one near the
-// predicted outline, and the robust loss and the edges' rejection leave out the few that
-// are a reflection on the sphere or the background's.
+// the cones of all views (Ceres, a robust loss). The log makes an edge's strength its
+// contrast, whatever the exposure; the edge looked for is the strongest one near the
+// predicted outline in any colour channel, and the robust loss and the edges' rejection
+// leave out the few that are a reflection on the sphere or the background's.
 #pragma once
 
 #include "renderer/camera.h"
@@ -38,10 +38,16 @@ struct SphereView {
 struct SphereOutlineOptions {
   int outline_samples = 256;   // edges looked for around each view's outline
   int refinements = 4;         // detect-and-fit rounds
-  double blur_pixels = 0.8;    // Gaussian sigma on the log luminance, against noise
-  double min_contrast = 0.05;  // weakest edge (log luminance step over a pixel) that counts
-  double min_found = 0.3;      // fraction of a view's outline that must show an edge
-  double disagreement = 4.0;   // a view whose RMS exceeds this times the others' (and 1 px) disagrees
+  double blur_pixels = 0.5;    // Gaussian sigma on the image, against noise
+  double min_contrast = 0.05;  // weakest edge (log step over a pixel, in one channel) that counts
+  // Where a coated sphere's outline lies on the profile across its rim: this fraction of
+  // the way from the background's level to the sphere's, each taken 1.5 px from the edge.
+  // Its rim is no step: at grazing angles the coat mirrors the background just behind it
+  // (the Fresnel factor tends to 1), and the sphere's own shade rises over a pixel or two
+  // inside. Measured on renders (docs/notes/sphere-outline.md); a mask's edge is halfway.
+  double rim_level = 0.33;
+  double min_found = 0.3;     // fraction of a view's outline that must show an edge
+  double disagreement = 4.0;  // a view whose RMS exceeds this times the others' (and 1 px) disagrees
 };
 
 // One view's share in the fit.
