@@ -176,7 +176,19 @@ TEST(SphereOutline, AViewWhereTheSphereMovedDisagrees) {
     const std::string message = error.what();
     EXPECT_NE(message.find("disagree"), std::string::npos) << message;
     EXPECT_NE(message.find("view_002"), std::string::npos) << message;
-    std::printf("%s\n", message.c_str());
+  }
+}
+
+// A view without the sphere (it stands 50 m below the board there, out of the picture):
+// the error names that view.
+TEST(SphereOutline, AViewWithoutTheSphereIsNamed) {
+  std::vector<SphereView> views = render_views("procedural:office", 0.04f, {0.8f, 0.8f, 0.8f});
+  views[1] = std::move(render_views("procedural:office", 0.04f, {0.8f, 0.8f, 0.8f}, Vec3d(0, 0, -50), 2)[1]);
+  try {
+    locate_sphere(views);
+    FAIL() << "a view without the sphere was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("view_001"), std::string::npos) << error.what();
   }
 }
 

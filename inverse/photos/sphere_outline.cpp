@@ -481,9 +481,14 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
       std::ostringstream text;
       text.precision(2);
       text << std::fixed << share.name << ": the view disagrees with the others about the sphere ("
-           << millimetres(sphere) << "): " << share.points << " of " << share.samples
-           << " places on its outline show its edge, RMS " << share.rms_px << " px against " << typical
-           << " px in the other views; check that the sphere did not move between the views and the view's "
+           << millimetres(sphere) << "): ";
+      if (too_few)
+        text << "only " << share.points << " of " << share.samples
+             << " places on the outline they give it show an edge in this view";
+      else
+        text << "its edges lie " << share.rms_px << " px RMS from that sphere's outline, against " << typical
+             << " px in the other views";
+      text << "; check that the sphere is whole in the picture and did not move between the views, and the view's "
               "registration (its board photo), or leave the view out";
       throw Error(text.str());
     }
