@@ -231,6 +231,9 @@ std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
   reduced.convertTo(bytes, CV_8U, 255.0 / std::max(high - low, 1e-6f), -255.0 * low / std::max(high - low, 1e-6f));
   const int size = std::min(bytes.cols, bytes.rows);
   std::vector<cv::Vec3f> circles;
+  // Canny's upper threshold 60 (a quarter of the range over a Sobel tap), a low vote
+  // threshold: the candidates are only seeds, and the pairs of views weed them out. The
+  // eight with the most votes are kept, spheres from 1/30 to 1/2 of the picture.
   cv::HoughCircles(bytes, circles, cv::HOUGH_GRADIENT, 1.0, size / 10.0, 60.0, 15.0, size / 30, size / 2);
   std::vector<Vec3d> candidates;
   for (size_t k = 0; k < std::min<size_t>(circles.size(), 8); ++k)
@@ -327,6 +330,10 @@ Sphere fit_cones(const std::vector<ViewEdges>& views, const std::vector<SphereVi
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   *summary_line = summary.BriefReport();
+  // A round without edges, or a failed solve, keeps the sphere it started from.
+  if (problem.NumResidualBlocks() == 0 || !summary.IsSolutionUsable() || !sphere.center.allFinite() ||
+      !std::isfinite(sphere.radius))
+    return seed;
   return sphere;
 }
 
