@@ -1,6 +1,7 @@
 #include "inverse/photos/sphere_outline.h"
 
 #include "renderer/error.h"
+#include "renderer/memory_budget.h"
 
 #include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
@@ -25,36 +26,39 @@ class EdgeImage {
   EdgeImage(const SphereView& view, double blur) : width_(view.image.width), height_(view.image.height) {
     const size_t count = size_t(width_) * size_t(height_);
     const int channels = view.mask.empty() ? 3 : 1;
+    // The channels, blurred and not, the luminance and two byte masks.
+    require_memory(uint64_t(count) * (8 * channels + 4 + 2), view.name + ": locating the sphere");
     std::vector<cv::Mat> linear(channels);
     cv::Mat luminance(height_, width_, CV_32F), unusable(height_, width_, CV_8U, cv::Scalar(0));
     for (cv::Mat& channel : linear) channel.create(height_, width_, CV_32F);
+    float* lum = luminance.ptr<float>();
     if (!view.mask.empty()) {
-      for (size_t i = 0; i < count; ++i) linear[0].at<float>(int(i)) = view.mask[i] > 0.5f ? 1.0f : 1e-2f;
-      luminance = linear[0].clone();
+      float* mask = linear[0].ptr<float>();
+      for (size_t i = 0; i < count; ++i) lum[i] = mask[i] = view.mask[i] > 0.5f ? 1.0f : 1e-2f;
     } else {
+      float* rgb[3] = {linear[0].ptr<float>(), linear[1].ptr<float>(), linear[2].ptr<float>()};
       for (size_t i = 0; i < count; ++i) {
         const float* p = &view.image.pixels[3 * i];
-        for (int c = 0; c < 3; ++c) linear[c].at<float>(int(i)) = std::isfinite(p[c]) ? std::max(p[c], 0.0f) : 0.0f;
-        luminance.at<float>(int(i)) = 0.2126f * linear[0].at<float>(int(i)) + 0.7152f * linear[1].at<float>(int(i)) +
-                                      0.0722f * linear[2].at<float>(int(i));
-        unusable.at<uint8_t>(int(i)) = !view.alpha.empty() && view.alpha[i] <= 0.0f;
+        for (int c = 0; c < 3; ++c) rgb[c][i] = std::isfinite(p[c]) ? std::max(p[c], 0.0f) : 0.0f;
+        lum[i] = 0.2126f * rgb[0][i] + 0.7152f * rgb[1][i] + 0.0722f * rgb[2][i];
+        unusable.ptr<uint8_t>()[i] = !view.alpha.empty() && view.alpha[i] <= 0.0f;
       }
     }
     // Black pixels (underexposed in every exposure) are floored at a thousandth of the
     // median luminance, so that their log stays finite and their noise makes no edges.
     std::vector<float> sorted(luminance.begin<float>(), luminance.end<float>());
     std::nth_element(sorted.begin(), sorted.begin() + count / 2, sorted.end());
-    const float floor = std::max(1e-3f * sorted[count / 2], std::numeric_limits<float>::min());
-    const auto blurred_log = [&](const cv::Mat& values, cv::Mat& blurred, cv::Mat& log) {
-      cv::GaussianBlur(values, blurred, cv::Size(0, 0), blur);
-      cv::max(blurred, floor, log);
-      cv::log(log, log);
-    };
+    floor_ = std::max(1e-3f * sorted[count / 2], std::numeric_limits<float>::min());
     linear_.resize(channels);
-    log_.resize(channels);
-    for (int c = 0; c < channels; ++c) blurred_log(linear[c], linear_[c], log_[c]);
-    cv::Mat unused;
-    blurred_log(luminance, unused, log_luminance_);
+    for (int c = 0; c < channels; ++c) cv::GaussianBlur(linear[c], linear_[c], cv::Size(0, 0), blur);
+    // The circle candidates' image: the log luminance, at most 800 pixels across.
+    hough_scale_ = std::max(1.0, std::max(width_, height_) / 800.0);
+    cv::GaussianBlur(luminance, luminance, cv::Size(0, 0), blur);
+    cv::resize(luminance, hough_,
+               cv::Size(int(std::lround(width_ / hough_scale_)), int(std::lround(height_ / hough_scale_))), 0, 0,
+               cv::INTER_AREA);
+    cv::max(hough_, floor_, hough_);
+    cv::log(hough_, hough_);
     cv::dilate(unusable, unusable_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
   }
 
@@ -62,13 +66,19 @@ class EdgeImage {
   int channels() const { return int(linear_.size()); }
   int width() const { return width_; }
   int height() const { return height_; }
-  const cv::Mat& log_luminance() const { return log_luminance_; }
+  // The log luminance reduced by hough_scale() (film pixels per pixel).
+  const cv::Mat& hough_image() const { return hough_; }
+  double hough_scale() const { return hough_scale_; }
 
-  // The blurred log (or linear) value of `channel` at film point (x, y) (pixel (i, j) has
-  // its centre at (i + 0.5, j + 0.5)), bilinear; nothing off the image or near a
+  // The blurred linear value (or its log) of `channel` at film point (x, y) (pixel (i, j)
+  // has its centre at (i + 0.5, j + 0.5)), bilinear; nothing off the image or near a
   // saturated pixel.
-  std::optional<double> log_at(int channel, const Vec2d& p) const { return at(log_[channel], p); }
   std::optional<double> linear_at(int channel, const Vec2d& p) const { return at(linear_[channel], p); }
+  std::optional<double> log_at(int channel, const Vec2d& p) const {
+    const auto value = linear_at(channel, p);
+    if (!value) return std::nullopt;
+    return std::log(std::max(*value, double(floor_)));
+  }
 
  private:
   std::optional<double> at(const cv::Mat& image, const Vec2d& p) const {
@@ -82,8 +92,10 @@ class EdgeImage {
   }
 
   int width_, height_;
-  std::vector<cv::Mat> linear_, log_;
-  cv::Mat log_luminance_, unusable_;
+  float floor_ = 0.0f;
+  std::vector<cv::Mat> linear_;
+  double hough_scale_ = 1.0;
+  cv::Mat hough_, unusable_;
 };
 
 // Where the linear profile of `channel` through film point `p` along `n` crosses `level`
@@ -217,13 +229,10 @@ std::optional<Sphere> intersect_cones(const Cone& a, const Cone& b) {
 }
 
 // Circle candidates in a view (film coordinates, pixels): Hough circles on its blurred
-// log luminance scaled to 8 bits, the image reduced to at most 800 pixels across.
+// log luminance (reduced to at most 800 pixels across) scaled to 8 bits.
 std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
-  const double scale = std::max(1.0, std::max(image.width(), image.height()) / 800.0);
-  cv::Mat reduced;
-  cv::resize(image.log_luminance(), reduced,
-             cv::Size(int(std::lround(image.width() / scale)), int(std::lround(image.height() / scale))), 0, 0,
-             cv::INTER_AREA);
+  const cv::Mat& reduced = image.hough_image();
+  const double scale = image.hough_scale();
   std::vector<float> sorted(reduced.begin<float>(), reduced.end<float>());
   std::sort(sorted.begin(), sorted.end());
   const float low = sorted[sorted.size() / 200], high = sorted[sorted.size() - 1 - sorted.size() / 200];
