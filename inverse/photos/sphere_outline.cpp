@@ -51,8 +51,9 @@ class EdgeImage {
     floor_ = std::max(1e-3f * sorted[count / 2], std::numeric_limits<float>::min());
     linear_.resize(channels);
     for (int c = 0; c < channels; ++c) cv::GaussianBlur(linear[c], linear_[c], cv::Size(0, 0), blur);
-    // The circle candidates' image: the log luminance, at most 800 pixels across.
-    hough_scale_ = std::max(1.0, std::max(width_, height_) / 800.0);
+    // The circle candidates' image: the log luminance, at most 480 pixels across:
+    // the Hough transform is most of the time, and the candidates are only seeds.
+    hough_scale_ = std::max(1.0, std::max(width_, height_) / 480.0);
     cv::GaussianBlur(luminance, luminance, cv::Size(0, 0), blur);
     cv::resize(luminance, hough_,
                cv::Size(int(std::lround(width_ / hough_scale_)), int(std::lround(height_ / hough_scale_))), 0, 0,
@@ -132,15 +133,19 @@ std::optional<double> find_edge(const EdgeImage& image, const Vec2d& p, const Ve
                                 const SphereOutlineOptions& options) {
   constexpr double h = 0.5;  // sample spacing, pixels; the derivative spans 2h = 1 pixel
   const int steps = int(std::ceil(reach / h));
-  std::vector<double> slope(2 * steps + 1, 0.0);
+  std::vector<double> slope(2 * steps + 1, 0.0), profile(2 * steps + 3);
   std::vector<int> channel(2 * steps + 1, 0);
-  for (int k = -steps; k <= steps; ++k)
-    for (int c = 0; c < image.channels(); ++c) {
-      const auto a = image.log_at(c, p + (k * h - h) * n), b = image.log_at(c, p + (k * h + h) * n);
-      if (!a || !b) return std::nullopt;  // a profile cut by the image's edge or a saturated pixel
-      const double step = std::abs(*b - *a) / (2 * h);
-      if (step > slope[k + steps]) slope[k + steps] = step, channel[k + steps] = c;
+  for (int c = 0; c < image.channels(); ++c) {
+    for (int k = -steps - 1; k <= steps + 1; ++k) {
+      const auto value = image.log_at(c, p + k * h * n);
+      if (!value) return std::nullopt;  // a profile cut by the image's edge or a saturated pixel
+      profile[k + steps + 1] = *value;
     }
+    for (int k = 0; k <= 2 * steps; ++k) {
+      const double step = std::abs(profile[k + 2] - profile[k]) / (2 * h);
+      if (step > slope[k]) slope[k] = step, channel[k] = c;
+    }
+  }
   const auto peak = std::max_element(slope.begin(), slope.end());
   if (*peak < options.min_contrast) return std::nullopt;
   const int strongest = channel[peak - slope.begin()];
@@ -229,7 +234,7 @@ std::optional<Sphere> intersect_cones(const Cone& a, const Cone& b) {
 }
 
 // Circle candidates in a view (film coordinates, pixels): Hough circles on its blurred
-// log luminance (reduced to at most 800 pixels across) scaled to 8 bits.
+// log luminance (reduced to at most 480 pixels across) scaled to 8 bits.
 std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
   const cv::Mat& reduced = image.hough_image();
   const double scale = image.hough_scale();
@@ -253,7 +258,7 @@ std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
 // The fraction of the sphere's outline in `view` where an edge lies within `reach`.
 double outline_support(const EdgeImage& image, const PinholeCamera& camera, const Sphere& sphere, double reach,
                        const SphereOutlineOptions& options) {
-  const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, 64);
+  const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, 32);
   if (samples.points.empty()) return 0.0;
   int found = 0;
   for (size_t k = 0; k < samples.points.size(); ++k)
@@ -373,8 +378,9 @@ Sphere initial_sphere(const std::vector<SphereView>& views, const std::vector<Ed
         for (const Cone& cb : cones[b]) {
           const auto sphere = intersect_cones(ca, cb);
           if (!sphere) continue;
+          // Each view adds at most 1: stop once the rest cannot beat the best.
           double score = 0.0;
-          for (size_t v = 0; v < views.size(); ++v) {
+          for (size_t v = 0; v < views.size() && score + double(views.size() - v) > best_score; ++v) {
             const double radius_px =
                 outline_radius_px(sphere_outline(views[v].camera, sphere->center, sphere->radius, 16));
             score += outline_support(images[v], views[v].camera, *sphere, std::max(3.0, 0.1 * radius_px), options);
