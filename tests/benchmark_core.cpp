@@ -2,11 +2,13 @@
 // Reported in docs/performance.md: SH projection of a 1024x512 map at lmax 4, 10M environment
 // samples on all cores, a 512x512 frame of the sh integrator, the invert-fit pipeline, the
 // path tracer on meshes (the still life, a 25k-triangle sphere), the HDR merge of a
-// seven-exposure 24-megapixel bracket (decoding, alignment check and merge apart).
+// seven-exposure 24-megapixel bracket (decoding, alignment check and merge apart), a
+// sphere located from its outline in three 1536x1024 views.
 #include "gltf_builder.h"
 #include "inverse/photos/bracket_alignment.h"
 #include "inverse/photos/hdr_merge.h"
 #include "inverse/photos/mirror_ball_probe.h"
+#include "inverse/photos/sphere_outline.h"
 #include "photo_bracket.h"
 #include "inverse/capture_scene.h"
 #include "inverse/joint_fit.h"
@@ -437,6 +439,46 @@ void BM_MirrorBallProbe256x128(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * 256 * 128 * 3);
 }
 BENCHMARK(BM_MirrorBallProbe256x128)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A 5 cm sphere seen from 0.5 m at 30 degrees elevation by three 1536 x 1024 cameras
+// (fl 1500 px, k1 -0.1) 120 degrees apart, rendered once by the sh integrator under the
+// office turned +Y to +Z (the board's frame), then located from its outline; the
+// counters say how far from the truth.
+void BM_LocateSphere3x1536(benchmark::State& state) {
+  static const std::vector<SphereView> views = [] {
+    const Vec3 center(0.03f, -0.02f, 0.05f);
+    Scene scene;
+    scene.path = "sphere-outline-benchmark";
+    scene.materials.push_back({"coated", 0.04f, RGB(0.8f, 0.1f, 0.1f), -1});
+    scene.spheres.push_back({"ball", center, 0.05f, 0, Mat3::Identity()});
+    const RayTracer tracer(scene);
+    EnvironmentOptions options;
+    options.to_world = Eigen::AngleAxisf(kPi / 2, Vec3::UnitX()).toRotationMatrix();
+    const Environment environment(office_map(), options);
+    std::vector<SphereView> result;
+    for (int v = 0; v < 3; ++v) {
+      const float a = (20.0f + 120.0f * v) * kPi / 180, e = 30.0f * kPi / 180;
+      const Vec3 eye = center + 0.5f * Vec3(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+      const Vec3 forward = (center - eye).normalized(), right = forward.cross(Vec3::UnitZ()).normalized();
+      SphereView view;
+      view.name = "view_00" + std::to_string(v);
+      view.camera.camera_to_world.linear() << right, right.cross(forward), -forward;
+      view.camera.camera_to_world.translation() = eye;
+      view.camera.width = 1536, view.camera.height = 1024;
+      view.camera.fl_x = view.camera.fl_y = 1500.0f;
+      view.camera.cx = 768.0f, view.camera.cy = 512.0f;
+      view.camera.distortion = {LensDistortion::Model::opencv, -0.1, 0.01, 0.0, 0.0, 0.0, 0.0};
+      view.image = render_sh(scene, tracer, environment, view.camera, {4, 2, false, 0});
+      result.push_back(std::move(view));
+    }
+    return result;
+  }();
+  SphereFit fit;
+  for (auto _ : state) fit = locate_sphere(views);
+  state.counters["centre_error_mm"] = 1e3 * (fit.center - Vec3d(0.03, -0.02, 0.05)).norm();
+  state.counters["radius_error_pct"] = 100.0 * (fit.radius / 0.05 - 1.0);
+}
+BENCHMARK(BM_LocateSphere3x1536)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace glaze
