@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 namespace glaze {
 
@@ -20,6 +21,7 @@ struct SimulateShootArgs {
   Resolution resolution{640, 480};
   std::string board = "9x6";
   std::string lens;
+  std::optional<float> fov;
   bool no_noise = false, no_probe = false, no_reflectance = false;
 };
 
@@ -29,6 +31,7 @@ int simulate(SimulateShootArgs& args) {
   simulation.height = args.resolution.height;
   if (std::sscanf(args.board.c_str(), "%dx%d", &simulation.board.cols, &simulation.board.rows) != 2)
     throw Error("--board takes COLSxROWS inner corners, e.g. 9x6, not \"" + args.board + "\"");
+  simulation.fov_degrees = args.fov.value_or(0.0f);
   if (!args.lens.empty()) simulation.lens = parse_lens(args.lens);
   if (args.environment.source || args.environment.scale || args.environment.rotation_degrees)
     simulation.environment = environment_spec(load_scene(simulation.scene), args.environment);
@@ -62,8 +65,8 @@ CommandRun declare_simulate_shoot(CLI::App& app) {
   add_real(app, "--distance M", s.distance, "camera to sphere centre in metres (0: 10 radii)", 0.0f, 1e4f);
   add_real(app, "--azimuth DEG", s.azimuth_degrees, "the first view's azimuth about the board's normal");
   add_resolution(app, "--res WxH", args->resolution, "the photos' size");
-  add_real(app, "--fov DEG", s.fov_degrees, "vertical field of view (0: the board fills 85% of the picture)", 0.0f,
-           170.0f);
+  add_real(app, "--fov DEG", args->fov, "vertical field of view (default: the board fills 85% of the picture)", 0.0f,
+           180.0f);
   add_text(app, "--lens MODEL:NAME=VALUE,...", args->lens, "the lens, as render --lens, e.g. OPENCV:k1=-0.1,k2=0.02");
   add_text(app, "--board COLSxROWS", args->board, "the chessboard's inner corners, one count even, one odd");
   add_real(app, "--square M", s.board.square, "the board's square in metres (0: 3 sphere diameters a row)", 0.0f,

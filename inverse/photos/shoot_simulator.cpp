@@ -464,6 +464,7 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
       for (int k = 0; k < options.exposures; ++k)
         shoot.exposures.push_back(middle * std::exp2(options.ev_step * (k - (options.exposures - 1) / 2.0)));
     }
+    if (options.keep_radiance) shoot.radiance.push_back(hdr);
     json times = json::object();
     for (size_t k = 0; k < shoot.exposures.size(); ++k) {
       const std::string file = "bracket_" + std::to_string(k) + extension;

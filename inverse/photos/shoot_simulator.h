@@ -102,7 +102,7 @@ struct ShootSimulation {
   double ev_step = 2.0;
   std::string format = "png";  // png, jpg (8-bit through the curve) or png16 (16-bit linear)
   CameraModel camera;
-  uint64_t seed = 1;
+  uint64_t seed = 0;
   int threads = 0;  // 0: all cores
 
   bool probe = true;
@@ -113,6 +113,7 @@ struct ShootSimulation {
   bool write_object = false;      // shoot.json's "object.center" and "radius" (the truth)
   bool known_intrinsics = false;  // shoot.json's "camera"
   bool progress = false;
+  bool keep_radiance = false;  // keep each bracket's true radiance in SimulatedShoot (tests)
 };
 
 struct SimulatedView {
@@ -129,6 +130,7 @@ struct SimulatedShoot {
   Vec3d ball_center;
   double ball_radius = 0.0, reflectance = 0.0;
   std::vector<SimulatedView> views, probes;
+  std::vector<Image> radiance;    // each bracket's true radiance (views, then probes), when keep_radiance
   std::vector<double> exposures;  // seconds, shortest first
   RGB hdr_unit = RGB::Ones();     // merged HDR = hdr_unit x radiance (simulation.json)
   Eigen::Matrix4d board_to_scene;
