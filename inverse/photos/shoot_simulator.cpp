@@ -424,7 +424,7 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
   camera_model.bits = options.format == "png16" ? 16 : 8;
   const std::string extension = options.format == "jpg" ? ".jpg" : ".png";
   // The middle exposure puts the first view's median radiance at the middle code.
-  const double middle_signal = camera_model.bits == 16 ? 0.5 / 1.0 : film_curve_inverse(128.0 / 255.0);
+  const double middle_signal = camera_model.bits == 16 ? 0.5 : film_curve_inverse(128.0 / 255.0);
   shoot.hdr_unit = RGB::Constant(float(camera_model.bits == 16 ? 1.0 : 1.0 / middle_signal));
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);

@@ -6,10 +6,10 @@
 // middle. Each view is a tripod position on a circle around the sphere, looking at it:
 //
 //   calibration/board_K.png the board alone in varied poses, as registration calibrates from
-//   view_NNN/board.png      the board (a matte textured quad) without the sphere, path
-//                           traced, photographed at one exposure (the board's median at
-//                           mid-grey)
-//   view_NNN/exposure_K.png the sphere without the board, rendered once in HDR by the sh
+//   view_NNN/board.png      the board (a matte textured quad on a dark table) without the
+//                           sphere, path traced under a uniform light of the environment's
+//                           mean, photographed at one exposure (the paper below clipping)
+//   view_NNN/bracket_K.png  the sphere without the board, rendered once in HDR by the sh
 //                           integrator (exact for a lone sphere), then photographed at
 //                           each exposure; exposures.json gives the times
 //   probe_NNN/              the same with a mirror ball in the sphere's place, rendered
