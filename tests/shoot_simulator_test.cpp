@@ -66,7 +66,8 @@ TEST(ShootSimulator, WritesTheShootLayout) {
   EXPECT_THROW(simulate_shoot(small_shoot(dir, "shoot")), Error);
 }
 
-// register_shoot on a simulated 640 x 480 shoot (8 calibration photos) recovers the
+// register_shoot on a simulated 640 x 480 shoot (8 calibration photos; 320 x 240 is too
+// coarse for the board seen at 30 degrees) recovers the
 // intrinsics and every view's pose.
 TEST(ShootSimulator, RegistrationRecoversTheCameras) {
   TemporaryDirectory dir;
@@ -96,7 +97,7 @@ TEST(ShootSimulator, RegistrationRecoversTheCameras) {
         180.0 / M_PI;
     const double millimetres = 1000.0 * (found.col(3) - expected.col(3)).norm();
     std::printf("%s: pose off by %.4f degrees and %.3f mm\n", shoot.views[v].name.c_str(), degrees, millimetres);
-    EXPECT_LT(degrees, 0.2);
+    EXPECT_LT(degrees, 0.25);  // 0.04 to 0.13 seen: calibrated from 11 photos at 30 degrees
     EXPECT_LT(millimetres, 2.0);
   }
 }
