@@ -67,8 +67,7 @@ TEST(ShootSimulator, WritesTheShootLayout) {
 }
 
 // register_shoot on a simulated 640 x 480 shoot (8 calibration photos; 320 x 240 is too
-// coarse for the board seen at 30 degrees) recovers the
-// intrinsics and every view's pose.
+// coarse for the board seen at 30 degrees) recovers the intrinsics and every view's pose.
 TEST(ShootSimulator, RegistrationRecoversTheCameras) {
   TemporaryDirectory dir;
   ShootSimulation options = small_shoot(dir, "shoot");
