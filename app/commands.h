@@ -20,6 +20,7 @@ CommandRun declare_preview(CLI::App& app);      // preview_command.cpp, built wi
 CommandRun declare_reproduce(CLI::App& app);    // reproduce_command.cpp
 CommandRun declare_hdr_merge(CLI::App& app);    // hdr_merge_command.cpp
 CommandRun declare_register(CLI::App& app);     // register_command.cpp
+CommandRun declare_simulate_shoot(CLI::App& app);  // simulate_shoot_command.cpp
 
 inline int command_render(const std::vector<std::string>& args) { return run_command("render", declare_render, args); }
 inline int command_convergence(const std::vector<std::string>& args) {

@@ -41,6 +41,7 @@ constexpr Command kCommands[] = {{"demo", declare_demo},
                                  {"invert-fit", declare_invert_fit},
                                  {"hdr-merge", declare_hdr_merge},
                                  {"register", declare_register},
+                                 {"simulate-shoot", declare_simulate_shoot},
                                  {"preview", declare_preview},
                                  {"reproduce", declare_reproduce},
                                  {"help", declare_help}};

@@ -50,36 +50,6 @@ struct RenderCommandOptions {
   std::string lens;         // --lens MODEL:k1=..,..: every camera seen through it
 };
 
-// --lens MODEL[:NAME=VALUE,...], MODEL as transforms.json's "camera_model" names it.
-LensDistortion parse_lens(const std::string& text) {
-  const std::string usage =
-      "--lens takes MODEL[:NAME=VALUE,...], e.g. OPENCV:k1=-0.1,k2=0.02 or OPENCV_FISHEYE:k1=0.05; ";
-  const size_t colon = text.find(':');
-  const std::string name = text.substr(0, colon);
-  const std::optional<LensDistortion::Model> model = camera_model_from_name(name);
-  if (!model) throw Error(usage + "\"" + name + "\" is not a camera model (" + kSupportedCameraModels + ")");
-  LensDistortion lens;
-  lens.model = *model;
-  std::stringstream terms(colon == std::string::npos ? "" : text.substr(colon + 1));
-  for (std::string term; std::getline(terms, term, ',');) {
-    const size_t equals = term.find('=');
-    const std::string key = term.substr(0, equals);
-    if (equals == std::string::npos || !model_uses(*model, key))
-      throw Error(usage + "\"" + term + "\" is not NAME=VALUE with a coefficient of " + name + " (" +
-                  kSupportedCameraModels + ")");
-    size_t used = 0;
-    double value = NAN;
-    try {
-      value = std::stod(term.substr(equals + 1), &used);
-    } catch (const std::exception&) {
-    }
-    if (!std::isfinite(value) || used != term.size() - equals - 1)
-      throw Error(usage + "\"" + term + "\" does not give " + key + " a finite number");
-    coefficient(lens, key) = value;
-  }
-  return lens;
-}
-
 std::string materials_json(const Scene& scene) {
   nlohmann::json list = nlohmann::json::array();
   for (const SceneMaterial& m : scene.materials) {

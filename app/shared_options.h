@@ -90,4 +90,8 @@ struct WindowOptions {
 };
 void add_window_options(CLI::App& app, WindowOptions& window);
 
+// --lens MODEL[:NAME=VALUE,...] (render, simulate-shoot), MODEL as transforms.json's
+// "camera_model" names it. Throws glaze::Error saying the syntax.
+LensDistortion parse_lens(const std::string& text);
+
 }  // namespace glaze

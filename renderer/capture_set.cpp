@@ -59,15 +59,6 @@ json object_json(const CaptureObject& object) {
           {"radius", sphere.radius}};
 }
 
-json environment_json(const CaptureEnvironment& environment) {
-  json entry = {{"scale", environment.options.scale},
-                {"rotation", environment.options.rotation_degrees},
-                {"to_world", rows(environment.options.to_world)}};
-  if (!environment.file.empty()) entry["file"] = environment.file;
-  if (!environment.procedural.empty()) entry["procedural"] = environment.procedural;
-  return entry;
-}
-
 json material_json(const CaptureMaterial& material) {
   const RGB& Rd = material.material.Rd();
   json entry = {{key(MaterialParameter::R0), material.material.R0()},
@@ -122,6 +113,15 @@ std::string transforms_json(const CaptureSet& captures) {
 void write_transforms(const std::string& directory, const CaptureSet& captures) {
   if (captures.frames.empty()) throw Error(directory + ": a capture set needs at least one frame");
   write_text_atomically((std::filesystem::path(directory) / "transforms.json").string(), transforms_json(captures));
+}  // namespace
+
+nlohmann::json environment_json(const CaptureEnvironment& environment) {
+  json entry = {{"scale", environment.options.scale},
+                {"rotation", environment.options.rotation_degrees},
+                {"to_world", rows(environment.options.to_world)}};
+  if (!environment.file.empty()) entry["file"] = environment.file;
+  if (!environment.procedural.empty()) entry["procedural"] = environment.procedural;
+  return entry;
 }
 
 // ---------------------------------------------------------------------------------------

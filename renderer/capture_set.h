@@ -30,6 +30,8 @@
 #include "renderer/environment.h"
 #include "renderer/material.h"
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <optional>
 #include <string>
 #include <variant>
@@ -89,6 +91,10 @@ struct CaptureSet {
   std::optional<float> saturation;  // pixel values at or above it are saturated
   std::string run;                  // the glaze run that wrote the set ("run"; output_folder.h), or empty
 };
+
+// The "environment" entry of a transforms.json: "scale", "rotation", "to_world" and
+// "file" or "procedural".
+nlohmann::json environment_json(const CaptureEnvironment& environment);
 
 // Throws glaze::Error unless `camera` is one a capture set can hold (perspective, with a
 // lens model that is one-to-one over its film).

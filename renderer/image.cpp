@@ -255,6 +255,23 @@ void write_picture(const std::string& path, int width, int height, std::span<con
   write_atomically(path, spec, OIIO::TypeDesc::UINT8, srgb.data(), metadata);
 }
 
+void write_photo_codes(const std::string& path, const PhotoCodes& photo,
+                       const std::map<std::string, std::string>& metadata) {
+  if (photo.width <= 0 || photo.height <= 0) throw Error(path + ": refusing to write an empty image");
+  if (photo.codes.size() != size_t(photo.width) * photo.height * 3)
+    throw Error(path + ": the codes do not match the image size");
+  if (photo.bits != 8 && photo.bits != 16) throw Error(path + ": a photo has 8 or 16 bits a code");
+  const OIIO::TypeDesc type = photo.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+  OIIO::ImageSpec spec(photo.width, photo.height, 3, type);
+  spec.attribute("Compression", "jpeg:95");
+  if (photo.bits == 16) {
+    write_atomically(path, spec, type, photo.codes.data(), metadata);
+    return;
+  }
+  const std::vector<uint8_t> bytes(photo.codes.begin(), photo.codes.end());
+  write_atomically(path, spec, type, bytes.data(), metadata);
+}
+
 std::string image_attribute(const std::string& path, const std::string& key) {
   return open_input(path, Readers::kGlaze, "")->spec().get_string_attribute(key);
 }

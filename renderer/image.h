@@ -84,6 +84,12 @@ struct PhotoCodes {
 // images (already HDR). Throws glaze::Error naming the file.
 PhotoCodes read_photo_codes(const std::string& path);
 
+// Writes `photo` as its camera would store it: 8-bit codes as PNG or JPEG (quality 95) by
+// the extension, 16-bit codes as PNG or TIFF; atomically, with string metadata. Throws
+// glaze::Error naming the file.
+void write_photo_codes(const std::string& path, const PhotoCodes& photo,
+                       const std::map<std::string, std::string>& metadata = {});
+
 // The numeric metadata attribute `key` of the photograph `path` (its header only: EXIF
 // "ExposureTime", "FNumber", ...), or nothing when it has none. A text value ("1/60")
 // is parsed. Camera raw is accepted as by read_photo_codes. Throws glaze::Error when

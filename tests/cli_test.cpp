@@ -99,6 +99,10 @@ const std::map<std::string, std::vector<std::string>> kCommandOptions = {
                     "--ridge",   "--diffuse-lmax", "--max-passes",   "--preview",
                     "--frames",  "--screenshot",   "--exposure",     "--tone-map"}},
     {"register", {"--out"}},
+    {"simulate-shoot",
+     {"--out", "--env", "--radius", "--views", "--elevation", "--distance", "--res", "--fov", "--lens", "--board",
+      "--square", "--calibration", "--exposures", "--ev-step", "--format", "--seed", "--reflectance",
+      "--known-intrinsics", "--threads"}},
 #if GLAZE_HAVE_PREVIEW
     {"preview",
      {"--camera",   "--res",       "--integrator", "--lmax",      "--ss",           "--max-spp",  "--seed",

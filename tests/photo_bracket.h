@@ -4,6 +4,7 @@
 #pragma once
 
 #include "inverse/photos/bracket.h"
+#include "inverse/photos/shoot_simulator.h"
 #include "renderer/error.h"
 #include "renderer/rng.h"
 
@@ -16,13 +17,9 @@
 
 namespace glaze::testing {
 
-// A film-like tone curve, code / 255 for an exposure E (1 saturates just below):
-// 1.06 (1 - exp(-3 E^0.7)), clipped at 1. A toe like E^0.7 and a shoulder.
-inline double film_curve(double exposure) {
-  return std::min(1.0, 1.06 * (1.0 - std::exp(-3.0 * std::pow(std::max(exposure, 0.0), 0.7))));
-}
-// Its inverse for code / 255 = v < 1.
-inline double film_curve_inverse(double v) { return std::pow(-std::log(1.0 - v / 1.06) / 3.0, 1.0 / 0.7); }
+// The tone curve is the shoot simulator's film_curve (not a power law).
+using glaze::film_curve;
+using glaze::film_curve_inverse;
 
 // The scene: a gradient over five decades along x (0.02 to 2000), a texture, a colour,
 // and a hot spot (radius height/8, 50000) that saturates every exposure.

@@ -5,6 +5,7 @@
 #include "inverse/photos/chessboard.h"
 #include "inverse/photos/registration.h"
 #include "inverse/photos/shoot.h"
+#include "inverse/photos/shoot_simulator.h"
 #include "renderer/display.h"
 #include "renderer/environment.h"
 #include "renderer/procedural_environment.h"
@@ -22,51 +23,6 @@ namespace {
 // two thirds of a 640 x 480 photo.
 const BoardSpec kBoard{9, 6, 0.025};
 constexpr int kWidth = 640, kHeight = 480;
-
-// The board as a glTF quad in the world's z = 0 plane, facing +z: corner (i, j) at
-// (i, j, 0) squares, the board's frame (registration.h) being the world's. The texture
-// has one texel per square and is sampled nearest, so that the squares' edges are
-// exact; a white margin one square wide surrounds them.
-std::string write_board(const TemporaryDirectory& dir) {
-  const int columns = kBoard.cols + 3, rows = kBoard.rows + 3;  // texels: squares and the margin
-  std::vector<unsigned char> rgb;
-  for (int row = 0; row < rows; ++row)
-    for (int column = 0; column < columns; ++column) {
-      // Square (a, b) spans corners a - 1 .. a along x and b - 1 .. b along y; texel row 0
-      // is the top (largest y). Square (0, 0), outside corner (0, 0), is black.
-      const int a = column - 1, b = kBoard.rows + 1 - row;
-      const bool margin = a < 0 || a > kBoard.cols || b < 0 || b > kBoard.rows;
-      const unsigned char value = margin || (a + b) % 2 ? 230 : 20;
-      rgb.insert(rgb.end(), {value, value, value});
-    }
-  const float s = float(kBoard.square), x0 = -2 * s, y0 = -2 * s, x1 = (kBoard.cols + 1) * s,
-              y1 = (kBoard.rows + 1) * s;
-  GltfBuffer buffer;
-  const json attributes = {{"POSITION", buffer.floats({x0, y0, 0, x1, y0, 0, x1, y1, 0, x0, y1, 0}, 3)},
-                           {"NORMAL", buffer.floats({0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}, 3)},
-                           {"TEXCOORD_0", buffer.floats({0, 1, 1, 1, 1, 0, 0, 0}, 2)}};
-  const int indices = buffer.indices({0, 1, 2, 0, 2, 3});
-  json gltf = gltf_document({{{"mesh", 0}}}, {0});
-  gltf["meshes"] = {{{"primitives", {{{"attributes", attributes}, {"indices", indices}, {"material", 0}}}}}};
-  gltf["materials"] = {quiet_material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}})};
-  gltf["samplers"] = {{{"magFilter", 9728}, {"minFilter", 9728}}};
-  gltf["textures"] = {{{"source", 0}, {"sampler", 0}}};
-  gltf["images"] = {{{"uri", "data:image/png;base64," + base64(encode_png(columns, rows, rgb))}}};
-  buffer.into(gltf);
-  return write_gltf(dir, "board.gltf", gltf);
-}
-
-// A camera at `eye` looking at `target`, its image's up towards `up`.
-Eigen::Affine3f look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {
-  const Vec3 forward = (target - eye).normalized();
-  const Vec3 right = forward.cross(up).normalized();
-  Eigen::Affine3f pose = Eigen::Affine3f::Identity();
-  pose.linear().col(0) = right;
-  pose.linear().col(1) = right.cross(forward);
-  pose.linear().col(2) = -forward;
-  pose.translation() = eye;
-  return pose;
-}
 
 // The camera of the test: fl 600 px, principal point off centre, a barrel lens.
 PinholeCamera true_camera(const Eigen::Affine3f& pose) {
@@ -116,7 +72,8 @@ class BoardRegistration : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TemporaryDirectory();
-    const Scene scene = load_scene(write_board(*dir_));
+    Scene scene;
+    add_board(scene, kBoard);
     const RayTracer tracer(scene);
     const Environment environment(make_procedural_environment("constant", 16, 8), {});
     // Under uniform light, sampling the material alone has the least noise: the board's
