@@ -317,7 +317,9 @@ TEST(ShootRegistration, MalformedShootJsonNamesTheKey) {
       {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"radius": 0}})",
        "\"probe.radius\" must be a positive number"},
       {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"diameter": 0.1}})",
-       "\"probe.diameter\" is not a key"}};
+       "\"probe.diameter\" is not a key"},
+      {R"({"board": {"inner_corners": [9, 6], "square": 0.02}, "probe": {"center": [0, 0, 0.05]}})",
+       "\"probe.radius\" is missing"}};
   for (const auto& [text, expected] : cases) {
     const std::string file = write_text(dir, "shoot.json", text);
     try {
@@ -349,12 +351,14 @@ TEST(ShootRegistration, ObjectAndProbeAreRead) {
   EXPECT_EQ(*shoot.probe.reflectance, (std::array<double, 3>{0.6, 0.6, 0.6}));
   write_text(dir, "shoot.json", R"({"board": {"inner_corners": [9, 6], "square": 0.025},
                                     "object": {"type": "sphere", "center": [0.1, 0.075, 0.05], "radius": 0.05},
-                                    "probe": {"radius": 0.0375, "reflectance": [0.55, 0.6, 0.65]}})");
+                                    "probe": {"center": [0.1, 0.075, 0.0375], "radius": 0.0375,
+                                              "reflectance": [0.55, 0.6, 0.65]}})");
   shoot = read_shoot(dir.path());
   EXPECT_EQ(shoot.object->kind, ShootObject::Kind::sphere);
   EXPECT_EQ(shoot.object->center, (std::array<double, 3>{0.1, 0.075, 0.05}));
   EXPECT_EQ(shoot.object->radius, 0.05);
   EXPECT_EQ(shoot.probe.radius, 0.0375);
+  EXPECT_EQ(shoot.probe.center, (std::array<double, 3>{0.1, 0.075, 0.0375}));
   EXPECT_EQ(*shoot.probe.reflectance, (std::array<double, 3>{0.55, 0.6, 0.65}));
   write_text(dir, "shoot.json",
              R"({"board": {"inner_corners": [9, 6], "square": 0.025}, "object": {"gltf": "a.glb"}})");

@@ -61,26 +61,59 @@ std::vector<double> distortion_vector(const CameraIntrinsics& camera) {
   return {camera.k1, camera.k2, camera.p1, camera.p2, camera.k3};
 }
 
+// A camera of these intrinsics (no pose), to check its lens.
+PinholeCamera intrinsics_camera(const CameraIntrinsics& c) {
+  PinholeCamera camera;
+  camera.width = c.width, camera.height = c.height;
+  camera.fl_x = float(c.fl_x), camera.fl_y = float(c.fl_y), camera.cx = float(c.cx), camera.cy = float(c.cy);
+  camera.distortion = {LensDistortion::Model::opencv, c.k1, c.k2, c.k3, 0.0, c.p1, c.p2};
+  return camera;
+}
+
 // Intrinsics and distortion from all the board photos; returns calibrateCamera's RMS error.
+// The higher radial terms are only known as far out as the board was seen: photos that
+// leave the film's corners out (a long lens, a small board) can leave k2 and k3 free to
+// grow until the model folds back before the corners, where pixels would then have no
+// ray. Such a fit is redone with k3 fixed at 0, then k2 too (OpenCV's advice for all but
+// wide lenses), with a warning.
 double calibrate(const std::vector<BoardCorners>& photos, const BoardSpec& board, CameraIntrinsics& camera) {
   const std::vector<std::vector<cv::Point3f>> objects(photos.size(), board_points(board));
   std::vector<std::vector<cv::Point2f>> images;
   for (const BoardCorners& photo : photos) images.push_back(photo.corners);
-  cv::Mat matrix, distortion;
-  std::vector<cv::Mat> rotations, translations;
-  const double rms = cv::calibrateCamera(objects, images, cv::Size(camera.width, camera.height), matrix, distortion,
-                                         rotations, translations, 0,
-                                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-12));
-  camera.fl_x = matrix.at<double>(0, 0);
-  camera.fl_y = matrix.at<double>(1, 1);
-  camera.cx = matrix.at<double>(0, 2) + 0.5;
-  camera.cy = matrix.at<double>(1, 2) + 0.5;
-  camera.k1 = distortion.at<double>(0);
-  camera.k2 = distortion.at<double>(1);
-  camera.p1 = distortion.at<double>(2);
-  camera.p2 = distortion.at<double>(3);
-  camera.k3 = distortion.at<double>(4);
-  return rms;
+  const int fixed_terms[] = {0, cv::CALIB_FIX_K3, cv::CALIB_FIX_K3 | cv::CALIB_FIX_K2};
+  for (size_t attempt = 0;; ++attempt) {
+    cv::Mat matrix, distortion;
+    std::vector<cv::Mat> rotations, translations;
+    const double rms = cv::calibrateCamera(
+        objects, images, cv::Size(camera.width, camera.height), matrix, distortion, rotations, translations,
+        fixed_terms[attempt], cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-12));
+    CameraIntrinsics fitted = camera;
+    fitted.fl_x = matrix.at<double>(0, 0);
+    fitted.fl_y = matrix.at<double>(1, 1);
+    fitted.cx = matrix.at<double>(0, 2) + 0.5;
+    fitted.cy = matrix.at<double>(1, 2) + 0.5;
+    fitted.k1 = distortion.at<double>(0);
+    fitted.k2 = distortion.at<double>(1);
+    fitted.p1 = distortion.at<double>(2);
+    fitted.p2 = distortion.at<double>(3);
+    fitted.k3 = distortion.at<double>(4);
+    try {
+      intrinsics_camera(fitted).check_lens("the calibrated camera");
+    } catch (const Error& e) {
+      if (attempt + 1 < std::size(fixed_terms)) continue;
+      throw Error(std::string(e.what()) +
+                  "; the calibration photos do not show the board near the film's corners: add photos with the "
+                  "board in every part of the frame");
+    }
+    if (attempt > 0)
+      warn(
+          "the calibration photos leave the film's corners out, where the full lens model folded back; calibrated "
+          "with " +
+          std::string(attempt == 1 ? "k3 = 0" : "k2 = k3 = 0") +
+          " instead. Photos with the board in the corners of the frame calibrate the lens there");
+    camera = fitted;
+    return rms;
+  }
 }
 
 // The pose of the camera that took `photo`, and its RMS reprojection error.
@@ -171,17 +204,9 @@ Registration register_shoot(const Shoot& shoot) {
 }
 
 PinholeCamera registered_camera(const Registration& registration, size_t view) {
-  const CameraIntrinsics& c = registration.camera;
-  PinholeCamera camera;
+  PinholeCamera camera = intrinsics_camera(registration.camera);
   camera.name = registration.views.at(view).name;
   camera.camera_to_world = Eigen::Affine3f(registration.views[view].camera_to_world.cast<float>());
-  camera.width = c.width;
-  camera.height = c.height;
-  camera.fl_x = float(c.fl_x);
-  camera.fl_y = float(c.fl_y);
-  camera.cx = float(c.cx);
-  camera.cy = float(c.cy);
-  camera.distortion = {LensDistortion::Model::opencv, c.k1, c.k2, c.k3, 0.0, c.p1, c.p2};
   return camera;
 }
 

@@ -113,6 +113,15 @@ const char* const kObjectHelp =
     "{\"type\": \"sphere\"} (locate it), {\"type\": \"sphere\", \"center\": [x, y, z], \"radius\": r} "
     "(board coordinates, metres) or {\"gltf\": FILE} (already in board coordinates)";
 
+std::array<double, 3> read_point(const json& object, const std::string& key, const std::string& file,
+                                 const std::string& where) {
+  const json& c = object.at(key);
+  if (!c.is_array() || c.size() != 3 ||
+      !std::all_of(c.begin(), c.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
+    fail(file, where + "." + key, "must be [x, y, z] in metres (board coordinates), not " + json_excerpt(c));
+  return {c[0].get<double>(), c[1].get<double>(), c[2].get<double>()};
+}
+
 ShootObject read_object(const json& object, const fs::path& folder, const std::string& file) {
   if (!object.is_object()) fail(file, "object", std::string("must be an object: ") + kObjectHelp);
   ShootObject result;
@@ -133,22 +142,24 @@ ShootObject read_object(const json& object, const fs::path& folder, const std::s
     fail(file, center ? "object.radius" : "object.center",
          "is missing: give both the centre and the radius, or neither to locate the sphere from its outline");
   if (!center) return result;
-  const json& c = object.at("center");
-  if (!c.is_array() || c.size() != 3 ||
-      !std::all_of(c.begin(), c.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }))
-    fail(file, "object.center", "must be [x, y, z] in metres (board coordinates), not " + json_excerpt(c));
   result.kind = ShootObject::Kind::sphere;
-  for (int i = 0; i < 3; ++i) result.center[i] = c[i].get<double>();
+  result.center = read_point(object, "center", file, "object");
   result.radius = positive_number(object, "radius", file, "object");
   return result;
 }
 
 ShootProbe read_probe(const json& probe, const std::string& file) {
-  const std::string help = "{\"radius\": metres, \"reflectance\": x or [r, g, b]}, each optional";
+  const std::string help =
+      "{\"center\": [x, y, z], \"radius\": metres, \"reflectance\": x or [r, g, b]}, each optional (a centre only "
+      "with the radius)";
   if (!probe.is_object()) fail(file, "probe", "must be an object " + help);
-  check_keys(probe, {"radius", "reflectance"}, file, "probe", help);
+  check_keys(probe, {"center", "radius", "reflectance"}, file, "probe", help);
   ShootProbe result;
   if (probe.contains("radius")) result.radius = positive_number(probe, "radius", file, "probe");
+  if (probe.contains("center")) {
+    if (!result.radius) fail(file, "probe.radius", "is missing: a ball's centre is given with its radius");
+    result.center = read_point(probe, "center", file, "probe");
+  }
   if (probe.contains("reflectance")) {
     const json& value = probe.at("reflectance");
     const auto fraction = [](const json& v) {

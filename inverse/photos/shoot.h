@@ -4,7 +4,8 @@
 //   SHOOT/shoot.json    {"board": {"inner_corners": [cols, rows], "square": metres},
 //                        "object": {"type": "sphere"} (locate it from its outline)
 //                                | {"type": "sphere", "center": [x, y, z], "radius": r} | {"gltf": FILE},
-//                        "probe": {"radius": r (optional), "reflectance": x or [r, g, b] (optional)},
+//                        "probe": {"center": [x, y, z], "radius": r, "reflectance": x or [r, g, b]}
+//                                 (each optional),
 //                        "camera": {"fl_x": .., "fl_y": .., "cx": .., "cy": .., "k1": .., ...}}
 //   SHOOT/calibration/  optional: photos of the board in many poses
 //   SHOOT/view_NNN/     one tripod position each, with the board photo board.* ...
@@ -50,6 +51,7 @@ struct ShootObject {
 
 // The mirror ball of the probe_NNN folders ("probe"); unset values are estimated.
 struct ShootProbe {
+  std::optional<std::array<double, 3>> center;  // given only with the radius
   std::optional<double> radius;
   std::optional<std::array<double, 3>> reflectance;  // per channel, in (0, 1]
 };
