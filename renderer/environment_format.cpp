@@ -6,14 +6,21 @@
 #include "renderer/latlong.h"
 #include "renderer/memory_budget.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
 namespace glaze {
 namespace {
 
-// Lookups per texel or pixel along each axis when resampling.
-constexpr int kSupersampling = 4;
+// Lookups along each axis of a lat-long texel when reading a probe: 2N x N texels are no
+// larger than an N-pixel probe's pixels anywhere (the mirror ball's rim packs many texels
+// into a pixel, never the reverse), so a few lookups spread over each texel average it.
+constexpr int kTexelSamples = 2;
+// And of a probe pixel when writing one: towards a mirror ball's rim a pixel spans many
+// texels.
+constexpr int kPixelSamples = 4;
 // How far inside the rim (in pixels) lookups stay: a bilinear lookup there reads only
 // pixels whose centres lie inside the circle.
 constexpr double kRimMarginPixels = 1.5;
@@ -112,13 +119,14 @@ Image probe_to_latlong(const Image& probe, EnvironmentFormat format, const std::
   require_memory(saturating_mul(uint64_t(width) * uint64_t(height), sizeof(RGB)), "the lat-long map of " + source);
   Image map(width, height);
   const double largest_radius = std::max(0.0, 1.0 - 2.0 * kRimMarginPixels / n);
-  for (int j = 0; j < height; ++j) {
+  // Rows are independent: the result does not depend on the thread count.
+  tbb::parallel_for(0, height, [&](int j) {
     for (int i = 0; i < width; ++i) {
       RGBd sum = RGBd::Zero();
       double weight = 0.0;
-      for (int b = 0; b < kSupersampling; ++b) {
-        for (int a = 0; a < kSupersampling; ++a) {
-          const Vec2 uv((i + (a + 0.5f) / kSupersampling) / width, (j + (b + 0.5f) / kSupersampling) / height);
+      for (int b = 0; b < kTexelSamples; ++b) {
+        for (int a = 0; a < kTexelSamples; ++a) {
+          const Vec2 uv((i + (a + 0.5f) / kTexelSamples) / width, (j + (b + 0.5f) / kTexelSamples) / height);
           float sin_theta = 0.0f;
           const Vec3 d = latlong_to_direction(uv, &sin_theta);
           Vec2d p = probe_position(format, d.cast<double>());
@@ -132,7 +140,7 @@ Image probe_to_latlong(const Image& probe, EnvironmentFormat format, const std::
       }
       map.set(i, j, (sum / weight).cast<float>());
     }
-  }
+  });
   return map;
 }
 
@@ -142,13 +150,13 @@ Image latlong_to_probe(const Image& latlong, EnvironmentFormat format, int size)
   if (size <= 0) throw Error("a probe image needs a positive size, not " + std::to_string(size));
   require_memory(saturating_mul(uint64_t(size) * uint64_t(size), sizeof(RGB)), "a probe image");
   Image probe(size, size);
-  for (int j = 0; j < size; ++j) {
+  tbb::parallel_for(0, size, [&](int j) {
     for (int i = 0; i < size; ++i) {
       RGBd sum = RGBd::Zero();
       int count = 0;
-      for (int b = 0; b < kSupersampling; ++b) {
-        for (int a = 0; a < kSupersampling; ++a) {
-          const Vec2d p = disc_of_pixel(i + (a + 0.5) / kSupersampling, j + (b + 0.5) / kSupersampling, size);
+      for (int b = 0; b < kPixelSamples; ++b) {
+        for (int a = 0; a < kPixelSamples; ++a) {
+          const Vec2d p = disc_of_pixel(i + (a + 0.5) / kPixelSamples, j + (b + 0.5) / kPixelSamples, size);
           if (p.norm() >= 1.0) continue;
           const Vec2 uv = direction_to_latlong(probe_direction(format, p).cast<float>());
           sum += bilinear(latlong, bilinear_footprint(uv, latlong.width, latlong.height, Wrap::repeat, Wrap::clamp))
@@ -158,7 +166,7 @@ Image latlong_to_probe(const Image& latlong, EnvironmentFormat format, int size)
       }
       if (count > 0) probe.set(i, j, (sum / count).cast<float>());
     }
-  }
+  });
   return probe;
 }
 

@@ -43,7 +43,7 @@ Vec2d probe_position(EnvironmentFormat format, const Vec3d& d);
 EnvironmentFormat recognise_environment_format(const Image& image, const std::string& source);
 
 // A square image in `format` resampled into a lat-long map of 2N x N texels for an N x N
-// image: each texel is the solid-angle weighted mean of 4 x 4 bilinear lookups spread over
+// image: each texel is the solid-angle weighted mean of 2 x 2 bilinear lookups spread over
 // it. Directions whose disc radius lies within 1.5 pixels of the rim read the value 1.5
 // pixels inside it along their azimuth: the rim's own pixels blend in the black outside
 // (and, for a mirror ball, the blind spot behind it). Throws glaze::Error if not square.

@@ -245,5 +245,31 @@ TEST(EnvironmentFormats, CaptureSetWithAnAngularFileFitsAsWithTheLatLong) {
   EXPECT_DOUBLE_EQ(given["R0"].get<double>(), angular["R0"].get<double>());
 }
 
+// `--env-format` on the command line, and the errors a wrong or missing format gives.
+TEST(EnvironmentFormats, CommandLineFormat) {
+  TemporaryDirectory dir;
+  write_office(dir);
+  auto sh = [&](const std::string& arguments) {
+    const auto run = testing::run_glaze("sh " + arguments + " --lmax 2", dir);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return nlohmann::json::parse(run.out)["L_lm"];
+  };
+  const nlohmann::json latlong = sh(dir.file("office.exr"));
+  const nlohmann::json angular = sh(dir.file("office_angular.exr") + " --env-format angular");
+  for (size_t k = 0; k < latlong.size(); ++k)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(angular[k][c].get<double>(), latlong[k][c].get<double>(), 0.01 * latlong[0][c].get<double>());
+  testing::expect_clear_failure(testing::run_glaze("sh " + dir.file("office.exr") + " --env-format mirror_ball", dir),
+                                "must be a square image");
+  Image square(16, 16);
+  std::fill(square.pixels.begin(), square.pixels.end(), 1.0f);
+  write_image(dir.file("square.exr"), square);
+  testing::expect_clear_failure(
+      testing::run_glaze("render " + testing::scenes_dir() + "red_sphere_office.gltf --env " + dir.file("square.exr") +
+                             " --integrator sh --res 8x8 --out " + dir.file("x.exr"),
+                         dir),
+      "--env-format");
+}
+
 }  // namespace
 }  // namespace glaze
