@@ -13,6 +13,7 @@ namespace glaze {
 CommandRun declare_demo(CLI::App& app);            // demo_command.cpp
 CommandRun declare_sh(CLI::App& app);              // environment_commands.cpp
 CommandRun declare_env(CLI::App& app);             // environment_commands.cpp
+CommandRun declare_env_convert(CLI::App& app);     // environment_commands.cpp
 CommandRun declare_render(CLI::App& app);          // render_command.cpp
 CommandRun declare_convergence(CLI::App& app);     // convergence_command.cpp
 CommandRun declare_invert_fit(CLI::App& app);      // invert_command.cpp

@@ -30,11 +30,15 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   const RayTracer& tracer = *in.tracer;
   const SampleSet& samples = in.samples;
   std::optional<EnvironmentSpec> spec = capture_environment(captures);
-  if (args.environment.source)
+  if (args.environment.source) {
     spec = EnvironmentSpec{*args.environment.source, spec ? spec->options : EnvironmentOptions{}};
+    spec->options.format = EnvironmentFormat::automatic;  // the set's format describes the set's file
+  }
   if (!spec)
     throw Error(captures.file + " names no environment: --mode " + mode +
                 " needs the lighting; give --env FILE|procedural:NAME");
+  if (args.environment.format)
+    spec->options.format = parse_environment_format(*args.environment.format, "--env-format");
   spec->options.scale = args.environment.scale.value_or(spec->options.scale);
   spec->options.rotation_degrees = args.environment.rotation_degrees.value_or(spec->options.rotation_degrees);
   const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);

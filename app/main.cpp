@@ -36,6 +36,7 @@ struct Command {
 constexpr Command kCommands[] = {{"demo", declare_demo},
                                  {"sh", declare_sh},
                                  {"env", declare_env},
+                                 {"env-convert", declare_env_convert},
                                  {"render", declare_render},
                                  {"convergence", declare_convergence},
                                  {"invert-fit", declare_invert_fit},

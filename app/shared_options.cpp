@@ -105,6 +105,7 @@ CLI::Option* add_supersampling(CLI::App& app, int& supersampling) {
 void add_environment_override(CLI::App& app, EnvironmentOverride& environment) {
   add_text(app, "--env ENV", environment.source,
            std::string("the lighting instead of the scene's: ") + kEnvironmentSyntax);
+  add_environment_format(app, environment.format);
   add_real(app, "--env-scale S", environment.scale, "multiply the lighting's radiance");
   add_real(app, "--env-rotation DEG", environment.rotation_degrees, "rotate the lighting about +Y");
 }
@@ -118,8 +119,10 @@ EnvironmentSpec environment_spec(const Scene& scene, const EnvironmentOverride& 
   } else {
     throw Error(scene.path +
                 ": the scene names no environment (scene.extras.glaze.environment, which files from other tools "
-                "lack); give the lighting with --env FILE (a lat-long map: .hdr, .exr) or --env procedural:office");
+                "lack); give the lighting with --env FILE (a lat-long map: .hdr, .exr; or a light probe) or --env "
+                "procedural:office");
   }
+  if (environment.format) spec.options.format = parse_environment_format(*environment.format, "--env-format");
   spec.options.scale = environment.scale.value_or(spec.options.scale);
   spec.options.rotation_degrees = environment.rotation_degrees.value_or(spec.options.rotation_degrees);
   return spec;

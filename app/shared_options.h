@@ -18,7 +18,17 @@ namespace glaze {
 
 // What ENV may be, wherever a command takes one.
 inline constexpr const char* kEnvironmentSyntax =
-    "a lat-long image (EXR, HDR, PFM, ...) or\nprocedural:NAME with NAME one of constant, office, blue-room";
+    "a lat-long image (EXR, HDR, PFM, ...), an angular map or mirror-ball image (square; see --env-format), or\n"
+    "procedural:NAME with NAME one of constant, office, blue-room";
+
+// --env-format NAME: how an environment file is laid out (renderer/environment_format.h);
+// by default recognised from its shape.
+template <typename T>
+CLI::Option* add_environment_format(CLI::App& app, T& format) {
+  return add_choice(app, "--env-format NAME", format, {"auto", "latlong", "angular", "mirror_ball"},
+                    "the environment file's layout: latlong (2:1), angular (Debevec's light probes) or mirror_ball; "
+                    "auto: 2:1 is latlong, square with black corners angular");
+}
 
 // SCENE: the glTF scene (render, convergence, preview).
 CLI::Option* add_scene(CLI::App& app, std::string& scene);
@@ -68,10 +78,10 @@ CLI::Option* add_lmax(CLI::App& app, T& lmax, const std::string& help) {
 // --ss K: the sh integrator's K x K samples a pixel.
 CLI::Option* add_supersampling(CLI::App& app, int& supersampling);
 
-// --env ENV, --env-scale S, --env-rotation DEG: the lighting instead of the scene's (or
-// the capture set's), or adjusted.
+// --env ENV, --env-format NAME, --env-scale S, --env-rotation DEG: the lighting instead of
+// the scene's (or the capture set's), or adjusted.
 struct EnvironmentOverride {
-  std::optional<std::string> source;
+  std::optional<std::string> source, format;
   std::optional<float> scale, rotation_degrees;
 };
 void add_environment_override(CLI::App& app, EnvironmentOverride& environment);

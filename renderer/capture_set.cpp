@@ -120,6 +120,8 @@ nlohmann::json environment_json(const CaptureEnvironment& environment) {
                 {"rotation", environment.options.rotation_degrees},
                 {"to_world", rows(environment.options.to_world)}};
   if (!environment.file.empty()) entry["file"] = environment.file;
+  if (environment.options.format != EnvironmentFormat::automatic)
+    entry["format"] = environment_format_name(environment.options.format);
   if (!environment.procedural.empty()) entry["procedural"] = environment.procedural;
   return entry;
 }
@@ -515,6 +517,12 @@ class TransformsReader {
         const std::vector<float> row = numbers(rows[r], 3, where, "to_world[" + std::to_string(r) + "]", kFinite);
         for (int c = 0; c < 3; ++c) environment.options.to_world(r, c) = row[c];
       }
+    }
+    if (entry.contains("format")) {
+      if (!entry["format"].is_string())
+        fail(where,
+             "\"format\" must be latlong, angular or mirror_ball (a string), not " + json_excerpt(entry["format"]));
+      environment.options.format = parse_environment_format(entry["format"].get<std::string>(), where);
     }
     return environment;
   }

@@ -62,7 +62,7 @@ Environment::Environment(Image radiance, const EnvironmentOptions& options, std:
 }
 
 Environment Environment::load(const std::string& path, const EnvironmentOptions& options) {
-  return Environment(read_image(path), options, path);
+  return Environment(read_environment_map(path, options.format), options, path);
 }
 
 Vec2 Environment::direction_to_uv(const Vec3& w) const { return direction_to_latlong(local_to_world_.transpose() * w); }

@@ -9,6 +9,7 @@
 // `to_world`.
 #pragma once
 
+#include "renderer/environment_format.h"
 #include "renderer/image.h"
 #include "renderer/image_lookup.h"
 #include "renderer/lanes.h"
@@ -30,6 +31,9 @@ struct EnvironmentOptions {
   float scale = 1.0f;
   float rotation_degrees = 0.0f;
   Mat3 to_world = Mat3::Identity();  // must be a rotation
+  // How load() reads a file (environment_format.h); a probe becomes a lat-long map before
+  // the orientation applies.
+  EnvironmentFormat format = EnvironmentFormat::automatic;
 };
 
 // A direction located in the map: what eval() and pdf() read, computed once so that a
@@ -53,7 +57,8 @@ class Environment {
   // an empty map, a to_world that is not a rotation, or a texel whose radiance times
   // the scale exceeds 1e20 (rendering would overflow float); warns if the map is not 2:1.
   Environment(Image radiance, const EnvironmentOptions& options, std::string source = "environment");
-  // Loads any lat-long float image OpenImageIO reads.
+  // Loads any image OpenImageIO reads: a lat-long map, or an angular or mirror-ball image
+  // (options.format, recognised when automatic) resampled into one.
   static Environment load(const std::string& path, const EnvironmentOptions& options = {});
 
   const std::string& source() const { return source_; }

@@ -961,6 +961,11 @@ class GltfLoader {
           for (int c = 0; c < 3; ++c) spec.options.to_world(r, c) = float(number(row.Get(c), "environment to_world"));
         }
       }
+      if (const Value* format = member(*environment, "format")) {
+        if (!format->IsString()) fail("scene extras.glaze.environment.format must be a string");
+        spec.options.format =
+            parse_environment_format(format->Get<std::string>(), path_ + ": scene extras.glaze.environment");
+      }
       scene_.environment = spec;
     }
   }

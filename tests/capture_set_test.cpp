@@ -227,7 +227,7 @@ TEST(CaptureSet, TypedFieldsComeBackAsWritten) {
   set.frames.push_back({"view.exr", camera("cam", 4, 3, 5, 5, 2, 1.5f, rigid(0, Vec3::UnitY(), Vec3(0, 0, 4))), ""});
   set.object = CaptureGltf{"object.gltf"};
   const Mat3 to_world = Eigen::AngleAxisf(0.3f, Vec3(1, 2, 3).normalized()).toRotationMatrix();
-  set.environment = CaptureEnvironment{"env.exr", "office", {0.75f, -45.5f, to_world}};
+  set.environment = CaptureEnvironment{"env.exr", "office", {0.75f, -45.5f, to_world, EnvironmentFormat::mirror_ball}};
   set.material = CaptureMaterial{PolishedMaterial(0.1f, RGB(0.2f, 0.3f, 0.45f)), "albedo.png"};
   set.renderer = CaptureRenderer{.integrator = CaptureRenderer::Integrator::sh, .supersampling = 3, .lmax = 7};
   write_transforms(dir.path().string(), set);
@@ -241,6 +241,7 @@ TEST(CaptureSet, TypedFieldsComeBackAsWritten) {
   EXPECT_EQ(back.environment->options.scale, 0.75f);
   EXPECT_EQ(back.environment->options.rotation_degrees, -45.5f);
   EXPECT_TRUE(back.environment->options.to_world == to_world) << back.environment->options.to_world;
+  EXPECT_EQ(back.environment->options.format, EnvironmentFormat::mirror_ball);
   ASSERT_TRUE(back.material.has_value());
   expect_same_material(back.material->material, set.material->material);
   EXPECT_EQ(back.material->texture, dir.file("albedo.png"));
