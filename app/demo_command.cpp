@@ -50,7 +50,12 @@ int demo_photos(const DemoCommandOptions& args, const std::filesystem::path& out
   std::printf("glaze demo --photos: the red sphere in procedural:office (%s), photographed\n\n", scene.c_str());
   std::printf("1. simulate-shoot: a simulated photo shoot -> %s\n", shoot.c_str());
   std::fflush(stdout);
-  std::vector<std::string> simulate = {scene, "--out", shoot};
+  // A board of 15 mm squares (1.5 sphere diameters along a row), framed to fill the
+  // picture, leaves the sphere about 90 px in radius at 640x480: the probe needs the ball
+  // that large (docs/notes/light-probe.md). 4 samples a pixel: the board photos are lit
+  // by a uniform light (simulate-shoot), which that renders with little noise besides
+  // the simulated camera's own.
+  std::vector<std::string> simulate = {scene, "--out", shoot, "--square", "0.015", "--board-spp", "4"};
   if (args.resolution) simulate.insert(simulate.end(), {"--res", to_string(*args.resolution)});
   command_simulate_shoot(simulate);
   std::printf("\n2. captures: HDR merge, registration, the sphere, the light probe -> %s\n", captures.c_str());

@@ -38,8 +38,9 @@ json rows(const auto& matrix) {
   return rows;
 }
 
-// The intrinsics, with the lens model and its coefficients as nerfstudio names them.
-json intrinsics(const PinholeCamera& c) {
+}  // namespace
+
+json intrinsics_json(const PinholeCamera& c) {
   json entry = {{"w", c.width}, {"h", c.height}, {"fl_x", c.fl_x}, {"fl_y", c.fl_y}, {"cx", c.cx}, {"cy", c.cy}};
   LensDistortion lens = c.distortion;
   entry["camera_model"] = camera_model_name(lens.model);
@@ -50,6 +51,8 @@ json intrinsics(const PinholeCamera& c) {
       entry[name] = coefficient(lens, name);
   return entry;
 }
+
+namespace {
 
 json object_json(const CaptureObject& object) {
   if (const CaptureGltf* gltf = std::get_if<CaptureGltf>(&object)) return {{"gltf", gltf->file}};
@@ -87,9 +90,9 @@ std::string transforms_json(const CaptureSet& captures) {
   if (captures.frames.empty()) throw Error("a capture set needs at least one frame");
   for (const CaptureFrame& frame : captures.frames) check_capture_camera(frame.camera);
   json root = json::object();
-  const json shared = intrinsics(captures.frames.front().camera);
+  const json shared = intrinsics_json(captures.frames.front().camera);
   bool all_shared = true;
-  for (const CaptureFrame& frame : captures.frames) all_shared = all_shared && intrinsics(frame.camera) == shared;
+  for (const CaptureFrame& frame : captures.frames) all_shared = all_shared && intrinsics_json(frame.camera) == shared;
   if (all_shared) root.update(shared);
   if (captures.saturation) root["saturation"] = *captures.saturation;
   json frames = json::array();
@@ -98,7 +101,7 @@ std::string transforms_json(const CaptureSet& captures) {
                   {"camera", frame.camera.name},
                   {"transform_matrix", rows(frame.camera.camera_to_world.matrix())}};
     if (!frame.mask_path.empty()) entry["mask_path"] = frame.mask_path;
-    if (!all_shared) entry.update(intrinsics(frame.camera));
+    if (!all_shared) entry.update(intrinsics_json(frame.camera));
     frames.push_back(entry);
   }
   root["frames"] = frames;

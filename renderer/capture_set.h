@@ -96,6 +96,10 @@ struct CaptureSet {
 // "file" or "procedural".
 nlohmann::json environment_json(const CaptureEnvironment& environment);
 
+// A camera's intrinsics as transforms.json holds them: w, h, fl_x, fl_y, cx, cy,
+// camera_model and the coefficients its lens model uses (nerfstudio's names).
+nlohmann::json intrinsics_json(const PinholeCamera& camera);
+
 // Throws glaze::Error unless `camera` is one a capture set can hold (perspective, with a
 // lens model that is one-to-one over its film).
 void check_capture_camera(const PinholeCamera& camera);

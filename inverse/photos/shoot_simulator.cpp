@@ -1,5 +1,6 @@
 #include "inverse/photos/shoot_simulator.h"
 
+#include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/memory_budget.h"
 #include "renderer/mirror_ball.h"
@@ -82,21 +83,10 @@ std::vector<std::vector<double>> rows_of(const Eigen::Matrix4d& m) {
 }
 
 json camera_json(const SimulatedView& view) {
-  const PinholeCamera& c = view.camera;
-  return {{"name", view.name},
-          {"w", c.width},
-          {"h", c.height},
-          {"fl_x", c.fl_x},
-          {"fl_y", c.fl_y},
-          {"cx", c.cx},
-          {"cy", c.cy},
-          {"camera_model", "OPENCV"},
-          {"k1", c.distortion.k1},
-          {"k2", c.distortion.k2},
-          {"p1", c.distortion.p1},
-          {"p2", c.distortion.p2},
-          {"k3", c.distortion.k3},
-          {"transform_matrix", rows_of(c.camera_to_world.matrix().cast<double>())}};
+  json entry = intrinsics_json(view.camera);
+  entry["name"] = view.name;
+  entry["transform_matrix"] = rows_of(view.camera.camera_to_world.matrix().cast<double>());
+  return entry;
 }
 
 // Whether the board, its margin included, is inside `camera`'s picture.

@@ -27,8 +27,8 @@
 // simulation.json holds what the pipeline should recover, all in the board's frame
 // (metres, cameras OpenGL camera-to-world): "object" {"center", "radius", "R0", "Rd"},
 // "probe" {"center", "radius", "reflectance"}, "views" and "probes" (per folder: "name",
-// "transform_matrix", the intrinsics w h fl_x fl_y cx cy and "camera_model" with k1 k2 p1
-// p2 k3), "board_to_scene" (4x4: board metres to the glTF's own units and axes),
+// "transform_matrix" and the intrinsics as transforms.json holds them: w h fl_x fl_y cx cy,
+// "camera_model" and its coefficients), "board_to_scene" (4x4: board metres to the glTF's own units and axes),
 // "environment" (a capture set's entry: the lighting in the board's frame),
 // "exposures" (seconds) and "hdr_unit" [u_r, u_g, u_b]: a bracket merged by `glaze
 // hdr-merge` (its recovered response fixed at code 128 = 1) is u x the true radiance.

@@ -378,11 +378,19 @@ Sphere initial_sphere(const std::vector<SphereView>& views, const std::vector<Ed
         for (const Cone& cb : cones[b]) {
           const auto sphere = intersect_cones(ca, cb);
           if (!sphere) continue;
-          // Each view adds at most 1: stop once the rest cannot beat the best.
+          // Each view adds at most 1: stop once the rest cannot beat the best. Two nearly
+          // parallel cones meet far away in a sphere larger than any picture: one whose
+          // outline is not wholly in a view's picture is not the sphere the views show
+          // whole (and its edge search would reach across millions of pixels).
           double score = 0.0;
           for (size_t v = 0; v < views.size() && score + double(views.size() - v) > best_score; ++v) {
-            const double radius_px =
-                outline_radius_px(sphere_outline(views[v].camera, sphere->center, sphere->radius, 16));
+            const std::vector<Vec2d> outline = sphere_outline(views[v].camera, sphere->center, sphere->radius, 16);
+            const double radius_px = outline_radius_px(outline);
+            const double picture = std::hypot(views[v].camera.width, views[v].camera.height);
+            if (outline.empty() || !(radius_px < picture)) {
+              score = -1.0;
+              break;
+            }
             score += outline_support(images[v], views[v].camera, *sphere, std::max(3.0, 0.1 * radius_px), options);
           }
           if (score > best_score) best_score = score, best = sphere;
