@@ -350,8 +350,8 @@ TEST(Cli, DemoRunsOnTheEmbeddedDefault) {
 }
 
 // From photographs: the simulated shoot, `captures` and the fit, with the material
-// recovered to what photo_shoot_test.cpp measures in the office (Rd 0.021 off: the
-// 8-bit merge reads the office's lamps low, docs/notes/photo-shoots.md).
+// recovered within the photo shoots' bounds (photo_shoot_test.cpp; measured R0 +0.0022,
+// Rd within 0.0043).
 TEST(Cli, DemoFromPhotographs) {
   testing::TemporaryDirectory dir;
   const CommandResult run = glaze("demo --photos --out " + dir.file("demo"), dir);
@@ -361,7 +361,7 @@ TEST(Cli, DemoFromPhotographs) {
   const nlohmann::json truth = nlohmann::json::parse(std::ifstream(dir.file("demo/shoot/simulation.json")));
   const nlohmann::json fit = nlohmann::json::parse(std::ifstream(dir.file("demo/fit/fit.json")));
   EXPECT_NEAR(fit["R0"].get<double>(), truth["object"]["R0"].get<double>(), 0.003);
-  for (int c = 0; c < 3; ++c) EXPECT_NEAR(fit["Rd"][c].get<double>(), truth["object"]["Rd"][c].get<double>(), 0.025);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(fit["Rd"][c].get<double>(), truth["object"]["Rd"][c].get<double>(), 0.01);
   EXPECT_TRUE(std::filesystem::exists(dir.file("demo/captures/summary.txt")));
 }
 

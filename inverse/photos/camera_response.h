@@ -57,7 +57,8 @@ struct ResponseSamples {
   std::vector<double> exposures;  // one per exposure
   std::vector<uint16_t> codes;    // samples x exposures x 3
 };
-// Every pixel of a photo of at most max_samples pixels, else max_samples at random.
+// Every pixel of a photo of at most max_samples pixels, else about max_samples spread
+// evenly over the scene's range of exposure.
 ResponseSamples sample_bracket(const BracketPhotos& photos, int max_samples = 16384);
 
 // Recovers the response of 8-bit photos jointly from all brackets' samples. Throws
