@@ -225,7 +225,7 @@ class CapturesRun {
   void register_views() {
     stage("registration");
     registration_ = register_shoot(shoot_);
-    report_["registration"] = json::parse(registration_json(registration_, shoot_.folder));
+    report_["registration"] = registration_json(registration_, shoot_.folder);
     end_stage("registration");
   }
 

@@ -23,7 +23,7 @@ int register_views(const RegisterOptions& options) {
   const Registration registration = register_shoot(shoot);
   const std::filesystem::path out =
       options.out.empty() ? shoot.folder / "registration.json" : std::filesystem::path(options.out);
-  write_text_atomically(out.string(), registration_json(registration, shoot.folder));
+  write_text_atomically(out.string(), registration_json(registration, shoot.folder).dump(2) + "\n");
   std::cout << registration_table(registration, shoot.folder) << "wrote " << out.string() << '\n';
   return 0;
 }

@@ -189,7 +189,10 @@ TEST(DiffuseLobe, WeightIsTheBrdfTimesCosineOverThePdf) {
     EXPECT_LT((direct - weight).abs().maxCoeff(), 1e-5f * (1 + direct.abs().maxCoeff())) << "trial " << trial;
     const auto sample = material.sample_diffuse(wo, Vec2(rng.next_float(), rng.next_float()));
     ASSERT_TRUE(sample.has_value());
-    EXPECT_EQ((sample->weight - weight).abs().maxCoeff(), 0.0f);
+    // The same formula, to rounding: this file may be compiled with other optimisations
+    // than the library (CMakeLists.txt, glaze_orchestration_code), which contract
+    // multiply-adds differently.
+    EXPECT_LE((sample->weight - weight).abs().maxCoeff(), 1e-6f * weight.abs().maxCoeff());
   }
 }
 

@@ -21,9 +21,13 @@ ExposureShift pair_shift(const BracketPhotos& photos, size_t previous, size_t ne
   const PhotoCodes& b = photos.photos[next];
   const float offset_a = float(std::log(photos.bracket.exposures[previous].exposure));
   const float offset_b = float(std::log(photos.bracket.exposures[next].exposure));
+  // Well exposed: not saturated, and green above the toe, whose codes are mostly noise in
+  // the darkest exposures (a shortest exposure shows a few highlights in the read noise,
+  // and their noise alone picked a shift of several pixels in a still bracket).
+  const int toe = limits.low + (limits.high - limits.low) / 16;
   auto usable = [&](const PhotoCodes& photo, size_t pixel) {
     const uint16_t* rgb = &photo.codes[pixel * 3];
-    return !limits.saturated(rgb) && rgb[1] > limits.low;
+    return !limits.saturated(rgb) && rgb[1] > toe;
   };
   // Sample pixels away from the border, well exposed in `previous`.
   std::vector<size_t> pixels;
@@ -49,9 +53,14 @@ ExposureShift pair_shift(const BracketPhotos& photos, size_t previous, size_t ne
     }
     if (count >= pixels.size() / 4 && count >= 100) cost[s] = sum / count;
   });
-  int best = kMaxShift * kSide + kMaxShift;  // no shift, unless another is strictly better
+  // No shift, unless another fits clearly better: a moved camera misaligns every edge, so
+  // the right shift takes far more than a tenth off the unshifted cost.
+  constexpr double kClearlyBetter = 0.9;
+  const int still = kMaxShift * kSide + kMaxShift;
+  int best = still;
   for (int s = 0; s < kSide * kSide; ++s)
     if (cost[s] < cost[best]) best = s;
+  if (!(cost[best] < kClearlyBetter * cost[still]) && std::isfinite(cost[still])) best = still;
   return {best % kSide - kMaxShift, best / kSide - kMaxShift};
 }
 

@@ -2,6 +2,7 @@
 #include "inverse/photos/registration.h"
 
 #include "inverse/photos/chessboard.h"
+#include "renderer/capture_set.h"
 #include "renderer/error.h"
 #include "renderer/image.h"
 
@@ -210,24 +211,11 @@ PinholeCamera registered_camera(const Registration& registration, size_t view) {
   return camera;
 }
 
-std::string registration_json(const Registration& registration, const fs::path& folder) {
-  const CameraIntrinsics& c = registration.camera;
-  json root = {
-      {"camera_model", "OPENCV"},
-      {"w", c.width},
-      {"h", c.height},
-      {"fl_x", c.fl_x},
-      {"fl_y", c.fl_y},
-      {"cx", c.cx},
-      {"cy", c.cy},
-      {"k1", c.k1},
-      {"k2", c.k2},
-      {"p1", c.p1},
-      {"p2", c.p2},
-      {"k3", c.k3},
-      {"board",
-       {{"inner_corners", {registration.board.cols, registration.board.rows}}, {"square", registration.board.square}}},
-      {"intrinsics", registration.calibrated ? "calibrated" : "given"}};
+json registration_json(const Registration& registration, const fs::path& folder) {
+  json root = intrinsics_json(intrinsics_camera(registration.camera));
+  root["board"] = {{"inner_corners", {registration.board.cols, registration.board.rows}},
+                   {"square", registration.board.square}};
+  root["intrinsics"] = registration.calibrated ? "calibrated" : "given";
   if (registration.calibrated) {
     json photos = json::array();
     for (const fs::path& photo : registration.calibration_photos) photos.push_back(shoot_relative(photo, folder));
@@ -245,7 +233,7 @@ std::string registration_json(const Registration& registration, const fs::path& 
                           {"reprojection_error_px", view.reprojection_error_px}});
   }
   root["frames"] = frames;
-  return root.dump(2) + "\n";
+  return root;
 }
 
 std::string registration_table(const Registration& registration, const fs::path& folder) {

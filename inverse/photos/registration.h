@@ -18,6 +18,7 @@
 #include "renderer/camera.h"
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include <string>
 #include <vector>
@@ -50,10 +51,11 @@ PinholeCamera registered_camera(const Registration& registration, size_t view);
 // there are too few photos to calibrate from; warns when a view's error is large.
 Registration register_shoot(const Shoot& shoot);
 
-// `registration` as JSON in transforms.json's vocabulary: w, h, fl_x, fl_y, cx, cy,
-// camera_model "OPENCV", k1, k2, p1, p2, k3, and "frames" with each view's
-// "transform_matrix" and "reprojection_error_px". Photo paths relative to `folder`.
-std::string registration_json(const Registration& registration, const std::filesystem::path& folder);
+// `registration` as JSON in transforms.json's vocabulary (capture_set.h's
+// intrinsics_json: w, h, fl_x, fl_y, cx, cy, camera_model "OPENCV", k1, k2, p1, p2, and k3
+// when not 0), and "frames" with each view's "transform_matrix" and
+// "reprojection_error_px". Photo paths relative to `folder`.
+nlohmann::json registration_json(const Registration& registration, const std::filesystem::path& folder);
 
 // A table for people: the intrinsics, then one line per view.
 std::string registration_table(const Registration& registration, const std::filesystem::path& folder);
