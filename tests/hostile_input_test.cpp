@@ -182,7 +182,7 @@ TEST(HostileInput, HugeFilmsAreRefusedBeforeAllocating) {
 // The backstop behind the estimates: with the limit off, a film beyond the address space
 // that `ulimit -v` leaves ends in std::bad_alloc, which is exit 1 asking for a report.
 TEST(HostileInput, OutOfMemoryIsAnErrorNotAnInternalError) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(GLAZE_SANITIZED)
   GTEST_SKIP() << "ASan reserves more address space than the ulimit below leaves";
 #endif
   TemporaryDirectory dir;
