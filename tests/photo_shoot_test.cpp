@@ -51,10 +51,12 @@ ShootSimulation simulated_shoot(const TemporaryDirectory& dir, const std::string
 
 // Relative RMSE of `probe` against `truth` times `unit` on a 64x32 lat-long grid of world
 // directions, over the cells that `coverage` (the probe's mask, in the probe's frame)
-// covers wholly; each cell the mean of 4 x 4 directions.
+// covers wholly; each cell the mean of 16 x 16 directions, which resolves a 1k map's
+// texels: 4 x 4 point samples a cell alias a small sun or lamp (lebombo's probe read
+// 5.4% off that way, and 3.9% with the cells' true means).
 double probe_error(const Environment& probe, const Environment& coverage, const Environment& truth, const RGB& unit,
                    int* cells) {
-  constexpr int kWidth = 64, kHeight = 32, kSub = 4;
+  constexpr int kWidth = 64, kHeight = 32, kSub = 16;
   double error = 0.0, norm = 0.0, cross = 0.0, probe_norm = 0.0;
   *cells = 0;
   for (int j = 0; j < kHeight; ++j)
@@ -177,25 +179,26 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
       100 * radius_error, 100 * probe_rmse, cells, material_R0, material_Rd, 100 * reflectance, joint_R0, joint_Rd);
 }
 
-// Measured in the office: the probe 7.0% and the joint fit's Rd 0.049; the rest within
-// the bounds (the reflectance 2.7%, the joint R0 +0.0011).
+// Measured in the office: the probe 5.2% (4.8% from noise-free 16-bit photos: the lamps
+// blurred over the pixels of a ball 90 px across in radius) and the joint fit's Rd 0.049;
+// the rest within the bounds (the reflectance 2.7%, the joint R0 +0.0011).
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {
-  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.085, 0.01, 0.03, 0.002, 0.06});
+  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.06, 0.01, 0.03, 0.002, 0.06});
 }
-// Measured: the probe 6.9%, the reflectance 9.0%, the joint fit R0 +0.0036 and Rd 0.033.
+// Measured: the probe 5.1%, the reflectance 9.0%, the joint fit R0 +0.0036 and Rd 0.033.
 TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
-  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.085, 0.01, 0.12, 0.005, 0.045});
+  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.06, 0.01, 0.12, 0.005, 0.045});
 }
-// Under lebombo: measured, the probe 5.4%, the reflectance 3.4% and the joint Rd 0.027 (the
-// issue's 5%, 3% and 0.006); the rest within the bounds.
+// Under lebombo: measured, the reflectance 3.4% and the joint Rd 0.027 (the 3%
+// and 0.006); the rest within the bounds (the probe 3.9%).
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.065, 0.01, 0.045, 0.002, 0.035});
+  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.045, 0.002, 0.035});
 }
-// Measured: the probe 5.5%, the reflectance 4.8%, the joint Rd 0.034.
+// Measured: the probe 4.0%, the reflectance 4.8%, the joint Rd 0.034.
 TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.065, 0.01, 0.06, 0.002, 0.045});
+  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.06, 0.002, 0.045});
 }
 
 // A shoot that cannot become a capture set is an error naming the file or the folder,
