@@ -193,6 +193,44 @@ TEST(ImageLookup, InsideTheImageEveryModeBlendsTheFourTexelsAround) {
   }
 }
 
+// Catmull-Rom: the pixel itself at its centre; any linear ramp exactly between centres
+// (its weights sum to 1 and their first moment is the offset); the edge pixels repeated
+// outside; and a one-pixel spot read half a pixel off keeps more of its peak than the
+// bilinear lookup, which is why the light probe uses it.
+TEST(ImageLookup, CatmullRomInterpolatesCentresAndRampsAndBlursLess) {
+  Image image(6, 5);
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 6; ++i)
+      image.set(i, j, RGB(2.0f + 0.5f * i - 0.25f * j, float(i * j), float((i * 7 + j * 3) % 5)));
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 6; ++i) {
+      const RGB value = catmull_rom(image, catmull_rom_footprint(i + 0.5f, j + 0.5f, 6, 5));
+      EXPECT_EQ(value[0], image.at(i, j)[0]) << i << ", " << j;
+      EXPECT_EQ(value[2], image.at(i, j)[2]) << i << ", " << j;
+    }
+  for (const float x : {1.5f, 2.1f, 3.73f, 4.5f})
+    for (const float y : {1.5f, 2.2f, 3.5f})
+      EXPECT_NEAR(catmull_rom(image, catmull_rom_footprint(x, y, 6, 5))[0],
+                  2.0f + 0.5f * (x - 0.5f) - 0.25f * (y - 0.5f), 1e-5f)
+          << x << ", " << y;
+  const CubicFootprint corner = catmull_rom_footprint(0.2f, 0.1f, 6, 5);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_GE(corner.x[k], 0);
+    EXPECT_GE(corner.y[k], 0);
+  }
+  Image flat(6, 5);
+  for (float& value : flat.pixels) value = 3.0f;
+  for (const float x : {0.0f, 0.2f, 2.7f, 5.9f, 6.0f})
+    EXPECT_FLOAT_EQ(catmull_rom(flat, catmull_rom_footprint(x, 0.1f, 6, 5))[1], 3.0f) << x;
+
+  Image spot(5, 5);
+  spot.set(2, 2, RGB::Constant(1.0f));
+  const float cubic = catmull_rom(spot, catmull_rom_footprint(3.0f, 2.5f, 5, 5))[0];
+  const float linear = bilinear(spot, bilinear_footprint(3.0f, 2.5f, 5, 5, Wrap::clamp, Wrap::clamp))[0];
+  EXPECT_FLOAT_EQ(linear, 0.5f);
+  EXPECT_FLOAT_EQ(cubic, 0.5625f);  // w1(0.5) = 9/16
+}
+
 TEST(ImageLookup, RepeatTilesTheImage) {
   const Image image = powers_of_two();
   // Left of column 0's centre: between column 3 (of the tile before) and column 0.

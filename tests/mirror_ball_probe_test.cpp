@@ -222,18 +222,19 @@ TEST(MirrorBallProbe, SolverReflectsBackThroughThePixel) {
   EXPECT_FALSE(ball_point_reflecting(kBall.center, axis, kBall));
 }
 
+// Measured 1.2% (2.6% when the photos were read bilinearly), and 0.34% under potsdamer.
 TEST(MirrorBallProbe, OfficeFromThreeDistortedViews) {
   EnvironmentOptions frame;
   frame.to_world = probe_to_board();
   const Environment office = make_environment("procedural:office", frame, 1024, 512);
-  expect_probe_matches(office, RGB(0.62f, 0.60f, 0.57f), 0.05);
+  expect_probe_matches(office, RGB(0.62f, 0.60f, 0.57f), 0.02);
 }
 
 TEST(MirrorBallProbe, RealMapFromThreeDistortedViews) {
   GLAZE_REQUIRE_ENVMAP(path, "potsdamer_platz_1k.hdr");
   EnvironmentOptions frame;
   frame.to_world = probe_to_board();
-  expect_probe_matches(Environment::load(path.string(), frame), RGB::Constant(0.6f), 0.05);
+  expect_probe_matches(Environment::load(path.string(), frame), RGB::Constant(0.6f), 0.01);
 }
 
 // A pixel saturated in the photo (alpha 0, its value a lower bound) is left out: the
