@@ -333,15 +333,16 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
     const Eigen::MatrixXd X = terms.x.middleCols(first, rows).cast<double>();
     const auto Y = terms.y.middleRows(first, rows);
     Eigen::MatrixXd W = terms.weight.middleRows(first, rows);
-    if (reweight_at)
-      for (Eigen::Index r = 0; r < rows; ++r) {
-        const Eigen::Vector3d residual = Y.row(r).transpose() - reweight_at->transpose() * X.col(r);
-        const double z = residual.cwiseAbs2().dot(W.row(r).transpose()) / (3.0 * c2);
-        if (trim)
-          W.row(r) *= std::exp(-z);
-        else
-          W.row(r) /= 1.0 + z;
-      }
+    if (reweight_at) {
+      // The chunk's residuals in one product: per pair, a 3 x n product is too small for
+      // Eigen's kernels, and their dispatch costs more than the arithmetic.
+      const Eigen::ArrayXd z =
+          ((Y - X.transpose() * *reweight_at).array().square() * W.array()).rowwise().sum() / (3.0 * c2);
+      if (trim)
+        W.array().colwise() *= (-z).exp();
+      else
+        W.array().colwise() /= 1.0 + z;
+    }
     Sums& s = partial[chunk];
     s.xy.resize(n_, 3);
     // X W X^T is symmetric: a rank update of its lower triangle by X sqrt(W) does half
@@ -365,11 +366,16 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
 }
 
 std::vector<double> CrossViewSystem::normalised_residuals(const PairTerms& terms, const Eigen::MatrixXd& d) const {
-  std::vector<double> squared(size_t(terms.y.rows()));
-  tbb::parallel_for(size_t(0), squared.size(), [&](size_t p) {
-    const Eigen::Index k = Eigen::Index(p);
-    const Eigen::Vector3d residual = terms.y.row(k).transpose() - d.transpose() * terms.x.col(k).cast<double>();
-    squared[p] = residual.cwiseAbs2().dot(terms.weight.row(k).transpose()) / 3.0;
+  // In the solve's chunks, each chunk's residuals in one product (as in solve).
+  const size_t used = size_t(terms.y.rows());
+  std::vector<double> squared(used);
+  tbb::parallel_for(size_t(0), (used + kChunk - 1) / kChunk, [&](size_t chunk) {
+    const Eigen::Index first = Eigen::Index(chunk * kChunk),
+                       rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
+    const Eigen::MatrixXd residual =
+        terms.y.middleRows(first, rows) - terms.x.middleCols(first, rows).cast<double>().transpose() * d;
+    Eigen::Map<Eigen::ArrayXd>(squared.data() + first, rows) =
+        (residual.array().square() * terms.weight.middleRows(first, rows).array()).rowwise().sum() / 3.0;
   });
   return squared;
 }
