@@ -16,6 +16,7 @@
 #include "renderer/output_folder.h"
 #include "renderer/ray_tracer.h"
 #include "renderer/scene.h"
+#include "renderer/sh.h"
 
 #include <nlohmann/json.hpp>
 
@@ -61,7 +62,7 @@ struct InvertFitOptions {
   Resolution lighting_resolution{256, 128};
   std::optional<Resolution> solve_resolution;
   std::optional<float> ridge;
-  int diffuse_lmax = 16;
+  int diffuse_lmax = kFullBandDiffuseLmax;
   std::optional<int> max_passes;
   // --preview.
   bool preview = false;

@@ -68,8 +68,8 @@ LightingProblem lighting_problem(const InvertFitOptions& args, const FitInputs& 
   // Captures from glaze's sh integrator carry a diffuse term cut at their lmax: exact for
   // the fit's model when that is at most the fit's lmax. Other captures, or sh ones that
   // do not say their lmax, get a band above any fit's: on them a second pass models the
-  // diffuse term's bands up to diffuse_lmax (lighting_fit.h, joint_fit.h); 16 keeps all
-  // but 0.4% of the kernel's L2 norm, as --mode material's.
+  // diffuse term's bands up to diffuse_lmax (lighting_fit.h, joint_fit.h), by default
+  // kFullBandDiffuseLmax, as --mode material's.
   // (sh captures above the fit's lmax have their bands up to their own lmax only.)
   const int capture_lmax = capture_defaults(in.captures, kShMaxLmax + 1).second;
   problem.band_limited = capture_lmax <= problem.lmax;

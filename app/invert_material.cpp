@@ -46,7 +46,7 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
 
   // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
   // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
-  const auto [default_footprint, default_lmax] = capture_defaults(captures, 16);
+  const auto [default_footprint, default_lmax] = capture_defaults(captures, kFullBandDiffuseLmax);
   const int lmax = args.lmax.value_or(default_lmax);
   auto stage = Clock::now();
   const int footprint = args.pixel_footprint.value_or(default_footprint);

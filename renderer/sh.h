@@ -18,6 +18,10 @@
 namespace glaze {
 
 inline constexpr int kShMaxLmax = 64;
+// Where the coat's diffuse term counts as full band: up to this band its kernel keeps all
+// but 0.4% of its L2 norm. Photographs and the path tracer carry every band; the fits
+// model them up to this one, and simulated photographs are rendered at it.
+inline constexpr int kFullBandDiffuseLmax = 16;
 
 constexpr int sh_count(int lmax) { return (lmax + 1) * (lmax + 1); }
 constexpr int sh_index(int l, int m) { return l * (l + 1) + m; }

@@ -381,9 +381,12 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
   }
 
   // The renderers: the sphere alone (sh: exact for one convex object), the board alone
-  // (path traced).
+  // (path traced). A photograph's diffuse term has every band, and the fits take it so
+  // (photos carry no renderer's lmax): the sphere is rendered full band, not at the sh
+  // integrator's default lmax 4, whose missing bands the fits would take off anyway.
   const RayTracer sphere_tracer(scene);
   ShIntegratorOptions sh_options;
+  sh_options.lmax = kFullBandDiffuseLmax;
   sh_options.threads = options.threads;
   sh_options.refined_supersampling = 4;
   const ShIntegrator sphere_renderer(scene, sphere_tracer, environment, sh_options);
