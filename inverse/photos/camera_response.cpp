@@ -5,8 +5,11 @@
 #include "renderer/rng.h"
 
 #include <Eigen/Dense>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <set>
@@ -173,36 +176,61 @@ ResponseSamples sample_bracket(const BracketPhotos& photos, int max_samples) {
   // channel chooses a third of the samples.
   constexpr int kBands = 16;
   const int max_code = (1 << first.bits) - 1;
-  const size_t exposures = photos.photos.size();
-  std::vector<uint16_t> place(pixels);
+  const size_t exposures = photos.photos.size(), places = exposures * kBands;
+  // Every pixel's place in each channel, in one parallel pass over the photos (the
+  // pass is a read of every code of the bracket; the counts are integers, so their sum
+  // does not depend on how the pixels are split between threads).
+  using Counts = std::array<std::vector<size_t>, 3>;
+  std::vector<const uint16_t*> codes;
+  for (const PhotoCodes& photo : photos.photos) codes.push_back(photo.codes.data());
+  std::array<std::vector<uint16_t>, 3> place;
+  for (std::vector<uint16_t>& channel : place) channel.resize(pixels);
+  const Counts count = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, pixels, size_t(1) << 16), Counts{},
+      [&](const tbb::blocked_range<size_t>& range, Counts counts) {
+        for (std::vector<size_t>& channel : counts) channel.resize(places, 0);
+        for (size_t pixel = range.begin(); pixel < range.end(); ++pixel) {
+          std::array<int, 3> best = {max_code + 1, max_code + 1, max_code + 1};
+          std::array<size_t, 3> key = {0, 0, 0};
+          for (size_t j = 0; j < exposures; ++j) {
+            const uint16_t* rgb = codes[j] + pixel * 3;
+            for (int c = 0; c < 3; ++c) {
+              const int distance = std::abs(2 * int(rgb[c]) - max_code);
+              // The code's band: its top four bits (codes run to 2^bits - 1).
+              if (distance < best[c])
+                best[c] = distance, key[c] = j * kBands + ((size_t(rgb[c]) * kBands) >> first.bits);
+            }
+          }
+          for (int c = 0; c < 3; ++c) {
+            place[c][pixel] = uint16_t(key[c]);
+            ++counts[c][key[c]];
+          }
+        }
+        return counts;
+      },
+      [&](Counts a, const Counts& b) {
+        for (int c = 0; c < 3; ++c) {
+          a[c].resize(places, 0);
+          for (size_t k = 0; k < b[c].size(); ++k) a[c][k] += b[c][k];
+        }
+        return a;
+      });
   std::vector<bool> chosen(pixels, false);
   Pcg32 rng(0x5eed);
   for (int c = 0; c < 3; ++c) {
-    std::vector<size_t> count(exposures * kBands, 0);
-    for (size_t pixel = 0; pixel < pixels; ++pixel) {
-      int best = max_code + 1;
-      size_t key = 0;
-      for (size_t j = 0; j < exposures; ++j) {
-        const int code = photos.photos[j].codes[pixel * 3 + c];
-        const int distance = std::abs(2 * code - max_code);
-        if (distance < best) best = distance, key = j * kBands + size_t(code) * kBands / size_t(max_code + 1);
-      }
-      place[pixel] = uint16_t(key);
-      ++count[key];
-    }
     const size_t budget = size_t(max_samples) / 3;
     const auto kept = [&](size_t cap) {
       size_t total = 0;
-      for (size_t n : count) total += std::min(n, cap);
+      for (size_t n : count[c]) total += std::min(n, cap);
       return total;
     };
     size_t cap = 1;
     while (kept(cap) < budget) ++cap;
     // Selection sampling (Knuth's algorithm S) per place: one pass, pixels in order.
-    std::vector<size_t> wanted(count.size()), left = count;
-    for (size_t k = 0; k < count.size(); ++k) wanted[k] = std::min(count[k], cap);
+    std::vector<size_t> wanted(places), left = count[c];
+    for (size_t k = 0; k < places; ++k) wanted[k] = std::min(count[c][k], cap);
     for (size_t pixel = 0; pixel < pixels; ++pixel) {
-      const size_t k = place[pixel];
+      const size_t k = place[c][pixel];
       if (wanted[k] > 0 && double(rng.next_uint()) * double(left[k]) < double(wanted[k]) * 0x1p32) {
         chosen[pixel] = true;
         --wanted[k];
