@@ -44,8 +44,9 @@ int invert_material(const InvertFitOptions& args, const std::filesystem::path& o
   const Environment environment = make_environment(spec->source, spec->options, spec->width, spec->height);
   const DropCounts dropped = samples.total_dropped();
 
-  // lmax 16 by default: the SH truncation of the diffuse term at lmax 4 is 1-3% under
-  // point-lit rooms (measured by `glaze convergence`), and it would bias Rd as much.
+  // kFullBandDiffuseLmax by default: the SH truncation of the diffuse term at lmax 4 is
+  // 1-3% under point-lit rooms (measured by `glaze convergence`), and it would bias Rd
+  // as much.
   const auto [default_footprint, default_lmax] = capture_defaults(captures, kFullBandDiffuseLmax);
   const int lmax = args.lmax.value_or(default_lmax);
   auto stage = Clock::now();

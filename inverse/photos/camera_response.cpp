@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <string>
 
 namespace glaze {
 namespace {
@@ -177,6 +178,9 @@ ResponseSamples sample_bracket(const BracketPhotos& photos, int max_samples) {
   constexpr int kBands = 16;
   const int max_code = (1 << first.bits) - 1;
   const size_t exposures = photos.photos.size(), places = exposures * kBands;
+  if (places > 65536)  // a place is a 16-bit key
+    throw Error(photos.bracket.folder.string() + ": " + std::to_string(exposures) +
+                " exposures in one bracket; the camera response is recovered from at most 4096");
   // Every pixel's place in each channel, in one parallel pass over the photos (the
   // pass is a read of every code of the bracket; the counts are integers, so their sum
   // does not depend on how the pixels are split between threads).

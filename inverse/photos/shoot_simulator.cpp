@@ -9,6 +9,7 @@
 #include "renderer/ray_tracer.h"
 #include "renderer/render.h"
 #include "renderer/rng.h"
+#include "renderer/sh.h"
 #include "renderer/sh_integrator.h"
 #include "renderer/capture_set.h"
 #include "renderer/text_file.h"
@@ -381,9 +382,9 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
   }
 
   // The renderers: the sphere alone (sh: exact for one convex object), the board alone
-  // (path traced). A photograph's diffuse term has every band, and the fits take it so
-  // (photos carry no renderer's lmax): the sphere is rendered full band, not at the sh
-  // integrator's default lmax 4, whose missing bands the fits would take off anyway.
+  // (path traced). A photograph's diffuse term has every band, and the fits of photo
+  // captures (which carry no renderer's lmax) model and take off its bands up to
+  // kFullBandDiffuseLmax: the simulated photos must have them too.
   const RayTracer sphere_tracer(scene);
   ShIntegratorOptions sh_options;
   sh_options.lmax = kFullBandDiffuseLmax;

@@ -101,7 +101,7 @@ struct ShootSimulation {
   int exposures = 7;
   double ev_step = 2.0;
   std::string format = "png";  // png, jpg (8-bit through the curve) or png16 (16-bit linear)
-  CameraModel camera;
+  CameraModel camera;          // its `bits` are the format's: simulate_shoot sets them
   uint64_t seed = 0;
   int threads = 0;  // 0: all cores
 
