@@ -19,6 +19,12 @@ namespace {
 // thread count.
 constexpr size_t kChunk = 4096;
 
+// Chunk `chunk` of `used` pairs: its first pair and its count.
+std::pair<Eigen::Index, Eigen::Index> chunk_span(size_t chunk, size_t used) {
+  const size_t first = chunk * kChunk;
+  return {Eigen::Index(first), Eigen::Index(std::min(used, first + kChunk) - first)};
+}
+
 }  // namespace
 
 // A view's samples as a triangle mesh over the directions they reflect: two triangles per
@@ -328,16 +334,12 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
   };
   std::vector<Sums> partial(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
-    const Eigen::Index first = Eigen::Index(chunk * kChunk),
-                       rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
+    const auto [first, rows] = chunk_span(chunk, used);
     const Eigen::MatrixXd X = terms.x.middleCols(first, rows).cast<double>();
     const auto Y = terms.y.middleRows(first, rows);
     Eigen::MatrixXd W = terms.weight.middleRows(first, rows);
     if (reweight_at) {
-      // The chunk's residuals in one product: per pair, a 3 x n product is too small for
-      // Eigen's kernels, and their dispatch costs more than the arithmetic.
-      const Eigen::ArrayXd z =
-          ((Y - X.transpose() * *reweight_at).array().square() * W.array()).rowwise().sum() / (3.0 * c2);
+      const Eigen::ArrayXd z = normalised_residuals(terms, first, X, *reweight_at) / c2;
       if (trim)
         W.array().colwise() *= (-z).exp();
       else
@@ -365,17 +367,25 @@ Eigen::MatrixXd CrossViewSystem::solve(const PairTerms& terms, const Eigen::Matr
   return d;
 }
 
+Eigen::ArrayXd CrossViewSystem::normalised_residuals(const PairTerms& terms, Eigen::Index first,
+                                                     const Eigen::MatrixXd& X, const Eigen::MatrixXd& d) {
+  // The chunk's residuals in one product: per pair, a 3 x n product is too small for
+  // Eigen's kernels, and their dispatch costs more than the arithmetic.
+  const Eigen::Index rows = X.cols();
+  return ((terms.y.middleRows(first, rows) - X.transpose() * d).array().square() *
+          terms.weight.middleRows(first, rows).array())
+             .rowwise()
+             .sum() /
+         3.0;
+}
+
 std::vector<double> CrossViewSystem::normalised_residuals(const PairTerms& terms, const Eigen::MatrixXd& d) const {
-  // In the solve's chunks, each chunk's residuals in one product (as in solve).
   const size_t used = size_t(terms.y.rows());
   std::vector<double> squared(used);
   tbb::parallel_for(size_t(0), (used + kChunk - 1) / kChunk, [&](size_t chunk) {
-    const Eigen::Index first = Eigen::Index(chunk * kChunk),
-                       rows = Eigen::Index(std::min(used, (chunk + 1) * kChunk)) - first;
-    const Eigen::MatrixXd residual =
-        terms.y.middleRows(first, rows) - terms.x.middleCols(first, rows).cast<double>().transpose() * d;
+    const auto [first, rows] = chunk_span(chunk, used);
     Eigen::Map<Eigen::ArrayXd>(squared.data() + first, rows) =
-        (residual.array().square() * terms.weight.middleRows(first, rows).array()).rowwise().sum() / 3.0;
+        normalised_residuals(terms, first, terms.x.middleCols(first, rows).cast<double>(), d);
   });
   return squared;
 }

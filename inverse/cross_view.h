@@ -171,6 +171,9 @@ class CrossViewSystem {
   Eigen::MatrixXd solve(const PairTerms& terms, const Eigen::MatrixXd* reweight_at, double c2, bool trim = false) const;
   // Per pair in use, its residual's squared norm in units of its noise.
   std::vector<double> normalised_residuals(const PairTerms& terms, const Eigen::MatrixXd& d) const;
+  // The same for the pairs in use [first, first + X.cols()), whose x is X (in double).
+  static Eigen::ArrayXd normalised_residuals(const PairTerms& terms, Eigen::Index first, const Eigen::MatrixXd& X,
+                                             const Eigen::MatrixXd& d);
 
   const LightingData& data_;
   int n_;

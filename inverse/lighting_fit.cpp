@@ -20,7 +20,7 @@ namespace {
 
 // Samples are gathered in fixed chunks whose sums are added in order: the moments do not
 // depend on the thread count.
-constexpr size_t kChunk = 2048;
+constexpr size_t kSampleChunk = 2048;
 
 // The moments of a set of rows: with the observations' alone, those of the rows among
 // themselves (aa ... cc) are empty.
@@ -53,10 +53,10 @@ struct Moments {
 using ChunkRows = Eigen::Ref<Eigen::MatrixXd>;
 template <typename Chunk>
 Moments sum_moments(size_t count, int n, bool observations_only, Chunk&& chunk) {
-  const size_t chunks = (count + kChunk - 1) / kChunk;
+  const size_t chunks = (count + kSampleChunk - 1) / kSampleChunk;
   std::vector<Moments> partial(chunks, Moments(n, observations_only));
   tbb::parallel_for(size_t(0), chunks, [&](size_t index) {
-    const size_t first = index * kChunk, rows = std::min(count, first + kChunk) - first;
+    const size_t first = index * kSampleChunk, rows = std::min(count, first + kSampleChunk) - first;
     Eigen::MatrixXd stacked = Eigen::MatrixXd::Zero(3 * n, Eigen::Index(rows)), O(rows, 3);
     chunk(first, stacked.topRows(n), stacked.middleRows(n, n), stacked.bottomRows(n), O);
     Moments& m = partial[index];
@@ -100,7 +100,7 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
     for (int m = -l; m <= l; ++m) kernel[sh_index(l, m)] = sh_lambda(l) * sh_kernel_coefficient(l);
   for (auto* rows : {&data.a, &data.b, &data.c}) rows->assign(count * n, 0.0f);
   // The taps are formed per chunk, then joined in sample order.
-  std::vector<std::vector<Vec3>> chunk_tap_normal((count + kChunk - 1) / kChunk);
+  std::vector<std::vector<Vec3>> chunk_tap_normal((count + kSampleChunk - 1) / kSampleChunk);
   std::vector<std::vector<float>> chunk_tap_share_g(chunk_tap_normal.size());
   std::vector<size_t> taps_of(count);
   data.reflected.resize(count);
@@ -112,8 +112,8 @@ LightingData gather_lighting_data(const SampleSet& samples, const CaptureSet& ca
         std::vector<float> basis(n), g(size_t(footprint) * footprint);
         std::vector<double> sum_Y(n), sum_gY(n);
         std::vector<Vec3> reflected(g.size());
-        std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kChunk];
-        std::vector<float>& tap_share_g = chunk_tap_share_g[first / kChunk];
+        std::vector<Vec3>& tap_normal = chunk_tap_normal[first / kSampleChunk];
+        std::vector<float>& tap_share_g = chunk_tap_share_g[first / kSampleChunk];
         tap_normal.reserve(size_t(O.rows())), tap_share_g.reserve(size_t(O.rows()));  // one per pixel sample
         for (Eigen::Index r = 0; r < O.rows(); ++r) {
           const size_t k = first + size_t(r);

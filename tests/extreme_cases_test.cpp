@@ -25,20 +25,17 @@ using testing::add_multiplicative_noise;
 using testing::CommandResult;
 using testing::expect_all_finite;
 using testing::read_json;
+using testing::run_glaze;
 using testing::sphere_scene_file;
 using testing::TemporaryDirectory;
 
 const std::string kScenes = testing::scenes_dir();
 
-CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) {
-  return testing::run_glaze(arguments, dir);
-}
-
 // Renders `scene` (a path) as a capture set into dir/NAME with the given options.
 std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name,
                      const std::string& options) {
   const std::string folder = dir.file(name);
-  const CommandResult run = glaze("render " + scene + " --captures " + folder + " " + options, dir);
+  const CommandResult run = run_glaze("render " + scene + " --captures " + folder + " " + options, dir);
   EXPECT_FALSE(run.crashed) << run.err;
   EXPECT_EQ(run.exit_code, 0) << run.err;
   return folder;
@@ -51,7 +48,8 @@ struct Fit {
 
 // invert-fit on the capture set in `folder`: exits 0, and fit.json holds only finite numbers.
 Fit fit(const TemporaryDirectory& dir, const std::string& folder, const std::string& options) {
-  const CommandResult run = glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/fit " + options, dir);
+  const CommandResult run =
+      run_glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/fit " + options, dir);
   EXPECT_FALSE(run.crashed) << run.err;
   EXPECT_EQ(run.exit_code, 0) << run.err;
   std::printf("%s%s", run.out.c_str(), run.err.c_str());
@@ -230,7 +228,7 @@ TEST(ExtremeCases, LightingFitRefusesAnObjectThatReflectsOnlyAtGrazingAngles) {
   const std::string black = captures(dir, sphere_scene_file(dir, 0.0f, RGB::Zero(), "black.gltf"), "black",
                                      "--integrator sh --ss 1 --res 96x96");
   const CommandResult refused =
-      glaze("invert-fit " + black + "/transforms.json --out " + black + "/fit --mode lighting", dir);
+      run_glaze("invert-fit " + black + "/transforms.json --out " + black + "/fit --mode lighting", dir);
   EXPECT_FALSE(refused.crashed) << refused.err;
   EXPECT_EQ(refused.exit_code, 1) << refused.err;
   EXPECT_NE(refused.err.find("transforms.json: R0 = 0 and Rd = 0"), std::string::npos) << refused.err;

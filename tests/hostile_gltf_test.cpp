@@ -49,14 +49,6 @@ json textured_triangle(GltfBuffer& buffer, const std::vector<float>& uvs = {0, 0
   return gltf;
 }
 
-// `glaze render PATH` must exit 1 with an error that mentions `word`.
-void expect_cli_error(const testing::TemporaryDirectory& dir, const std::string& path, const std::string& word) {
-  const CommandResult run =
-      run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --res 8x8 --spp 1", dir);
-  expect_clear_failure(run, word);
-  EXPECT_FALSE(std::filesystem::exists(dir.file("x.exr")));
-}
-
 // Loads `gltf` (written to a file), expecting an Error that mentions every word.
 void expect_refused(const json& gltf, const std::vector<std::string>& words) {
   testing::TemporaryDirectory dir;
@@ -85,11 +77,11 @@ TEST(HostileGltf, AccessorCountBeyondItsView) {
   GltfBuffer buffer;
   json gltf = textured_triangle(buffer);
   gltf["accessors"][0]["count"] = kWrapsVec3;
-  expect_cli_error(dir, testing::write_gltf(dir, "wraps.gltf", gltf), "accessor");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "wraps.gltf", gltf), "accessor");
   GltfBuffer fresh;
   gltf = textured_triangle(fresh);
   gltf["accessors"][1]["count"] = 4;
-  expect_cli_error(dir, testing::write_gltf(dir, "long.gltf", gltf), "accessor 1");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "long.gltf", gltf), "accessor 1");
 }
 
 // 1.2: offsets near 2^64 (the old sum wrapped and passed), and ranges past the buffer.
@@ -217,7 +209,7 @@ TEST(HostileGltf, DeeplyNestedExtras) {
   testing::TemporaryDirectory dir;
   const std::string path = testing::write_text(dir, "deep.gltf", text);
   testing::expect_load_error(dir, path, {"deep.gltf", "nested deeper than 100"});
-  expect_cli_error(dir, path, "nested deeper than 100");
+  testing::expect_render_refused(dir, path, "nested deeper than 100");
 }
 
 // 1.5: indices that are not whole numbers in range are refused with their JSON path
@@ -253,7 +245,7 @@ TEST(HostileGltf, IndicesThatAreNotIndices) {
   GltfBuffer buffer;
   json gltf = textured_triangle(buffer);
   gltf["meshes"][0]["primitives"][0]["material"] = 4294967296u;
-  expect_cli_error(dir, testing::write_gltf(dir, "material.gltf", gltf), "material");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "material.gltf", gltf), "material");
 }
 
 // 1.5: environment sides that are not whole numbers in [1, 65536], and a map too large
@@ -273,7 +265,7 @@ TEST(HostileGltf, EnvironmentSides) {
   expect_refused(with_environment(4096, 2048), {"environment", "4096x2048", "memory"});
   set_memory_limit(limit);
   testing::TemporaryDirectory dir;
-  expect_cli_error(dir, testing::write_gltf(dir, "env.gltf", with_environment(1e10, 8)), "width");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "env.gltf", with_environment(1e10, 8)), "width");
 }
 
 // 6.3: a camera node scaled by (-1, 1, -1) (determinant +1: a half turn) looks away
@@ -308,14 +300,14 @@ TEST(HostileGltf, CoordinatesBeyondWhatEmbreeTakes) {
   GltfBuffer far_camera;
   json gltf = textured_triangle(far_camera);
   gltf["nodes"][1]["translation"] = {0, 1e38, 4};
-  expect_cli_error(dir, testing::write_gltf(dir, "camera.gltf", gltf), "lies beyond +-1e15");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "camera.gltf", gltf), "lies beyond +-1e15");
   GltfBuffer far_sphere;
   gltf = textured_triangle(far_sphere);
   json sphere = testing::sphere_node(1.0);
   sphere["translation"] = {0, 0, -1e20};
   gltf["nodes"].push_back(sphere);
   gltf["scenes"][0]["nodes"].push_back(2);
-  expect_cli_error(dir, testing::write_gltf(dir, "sphere.gltf", gltf), "reaches beyond +-1e15");
+  testing::expect_render_refused(dir, testing::write_gltf(dir, "sphere.gltf", gltf), "reaches beyond +-1e15");
 }
 
 }  // namespace

@@ -21,26 +21,24 @@ using testing::add_multiplicative_noise;
 using testing::CommandResult;
 using testing::read_json;
 using testing::rewrite_frames;
+using testing::run_glaze;
 using testing::sphere_scene_file;
 using testing::TemporaryDirectory;
 
 const std::string kScenes = testing::scenes_dir();
 
-CommandResult glaze(const std::string& arguments, const TemporaryDirectory& dir) {
-  return testing::run_glaze(arguments, dir);
-}
-
 // Renders SCENE's capture set into dir/NAME with the given renderer options.
 std::string captures(const TemporaryDirectory& dir, const std::string& scene, const std::string& name,
                      const std::string& options) {
   const std::string folder = dir.file(name);
-  const CommandResult run = glaze("render " + kScenes + scene + " --captures " + folder + " " + options, dir);
+  const CommandResult run = run_glaze("render " + kScenes + scene + " --captures " + folder + " " + options, dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   return folder;
 }
 
 nlohmann::json fit(const TemporaryDirectory& dir, const std::string& folder, const std::string& options) {
-  const CommandResult run = glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/fit " + options, dir);
+  const CommandResult run =
+      run_glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/fit " + options, dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   std::printf("%s", run.out.c_str());
   return read_json(folder + "/fit/fit.json");
@@ -149,7 +147,7 @@ TEST(InvertFit, ParametersAtTheirBoundsAreRecoveredAtTheBounds) {
   TemporaryDirectory dir;
   const std::string scene = sphere_scene_file(dir, 0.0f, RGB(1.0f, 0.0f, 0.5f));
   const CommandResult render =
-      glaze("render " + scene + " --captures " + dir.file("bounds") + " --integrator sh --ss 1 --res 96x96", dir);
+      run_glaze("render " + scene + " --captures " + dir.file("bounds") + " --integrator sh --ss 1 --res 96x96", dir);
   ASSERT_EQ(render.exit_code, 0) << render.err;
   const nlohmann::json result = fit(dir, dir.file("bounds"), "--mode material --lmax 4 --pixel-footprint 1");
   EXPECT_NEAR(result["R0"].get<double>(), 0.0, 1e-6);
@@ -173,9 +171,9 @@ TEST(InvertFit, PureMirrorRecoversROneAndSaysRdIsUnconstrained) {
   TemporaryDirectory dir;
   const std::string scene = sphere_scene_file(dir, 1.0f, RGB(0.3f, 0.6f, 0.9f));
   const CommandResult render =
-      glaze("render " + scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 64x64", dir);
+      run_glaze("render " + scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 64x64", dir);
   ASSERT_EQ(render.exit_code, 0) << render.err;
-  const CommandResult run = glaze(
+  const CommandResult run = run_glaze(
       "invert-fit " + dir.file("mirror") + " --mode material --lmax 4 --pixel-footprint 1 --out " + dir.file("fit"),
       dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -194,19 +192,19 @@ TEST(InvertFit, BadCaptureSetsGiveClearErrors) {
   nlohmann::json resized = transforms;
   resized["frames"][0]["file_path"] = "small.exr";
   std::ofstream(folder + "/transforms.json") << resized.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
                                 "small.exr");
   // The object placed where no camera sees it.
   nlohmann::json moved = transforms;
   moved["object"]["center"] = {0.0, 50.0, 0.0};
   std::ofstream(folder + "/transforms.json") << moved.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
                                 "not visible");
   // No lighting to fit under.
   nlohmann::json dark = transforms;
   dark.erase("environment");
   std::ofstream(folder + "/transforms.json") << dark.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
                                 "--env");
 }
 
@@ -264,7 +262,7 @@ TEST(InvertFitLighting, TexelsBetweenSamplesTakeTheSamplesAround) {
   EXPECT_EQ(result["reference_map_error"]["64x32"]["cells"].get<int>(), 2048);
   EXPECT_LT(result["reference_map_error"]["64x32"]["relative_rmse"].get<double>(), 0.05);
   auto projection = [&](const std::string& map) {
-    const CommandResult run = glaze("sh " + map + " --lmax 6", dir);
+    const CommandResult run = run_glaze("sh " + map + " --lmax 6", dir);
     EXPECT_EQ(run.exit_code, 0) << run.err;
     return nlohmann::json::parse(run.out)["L_lm"];
   };
@@ -330,11 +328,11 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
   TemporaryDirectory dir;
   const std::string mirror_scene = sphere_scene_file(dir, 0.95f, RGB::Zero());
   ASSERT_EQ(
-      glaze("render " + mirror_scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 256x256",
-            dir)
+      run_glaze(
+          "render " + mirror_scene + " --captures " + dir.file("mirror") + " --integrator sh --ss 1 --res 256x256", dir)
           .exit_code,
       0);
-  const CommandResult mirror = glaze(
+  const CommandResult mirror = run_glaze(
       "invert-fit " + dir.file("mirror") + " --mode lighting --pixel-footprint 1 --out " + dir.file("mirror/fit"), dir);
   ASSERT_EQ(mirror.exit_code, 0) << mirror.err;
   const nlohmann::json probe = read_json(dir.file("mirror/fit/fit.json"));
@@ -345,10 +343,11 @@ TEST(InvertFitLighting, MirrorIsAProbeAndMatteSaysItIsMatte) {
   std::filesystem::remove(mirror_scene);
   const std::string matte_scene = sphere_scene_file(dir, 0.002f, RGB::Constant(0.9f));
   ASSERT_EQ(
-      glaze("render " + matte_scene + " --captures " + dir.file("matte") + " --integrator sh --ss 1 --res 256x256", dir)
+      run_glaze("render " + matte_scene + " --captures " + dir.file("matte") + " --integrator sh --ss 1 --res 256x256",
+                dir)
           .exit_code,
       0);
-  const CommandResult matte = glaze(
+  const CommandResult matte = run_glaze(
       "invert-fit " + dir.file("matte") + " --mode lighting --pixel-footprint 1 --out " + dir.file("matte/fit"), dir);
   ASSERT_EQ(matte.exit_code, 0) << matte.err;
   EXPECT_NE(matte.err.find("matte-like"), std::string::npos) << matte.err;
@@ -431,9 +430,10 @@ TEST(InvertFit, ResultsDoNotDependOnThreads) {
     std::map<int, nlohmann::json> results;
     for (int threads : {1, 3}) {
       const std::string out = folder + "/fit_" + mode + "_" + std::to_string(threads);
-      const CommandResult run = glaze("invert-fit " + folder + "/transforms.json --mode " + mode +
-                                          " --pixel-footprint 1 --threads " + std::to_string(threads) + " --out " + out,
-                                      dir);
+      const CommandResult run =
+          run_glaze("invert-fit " + folder + "/transforms.json --mode " + mode + " --pixel-footprint 1 --threads " +
+                        std::to_string(threads) + " --out " + out,
+                    dir);
       ASSERT_EQ(run.exit_code, 0) << run.err;
       results[threads] = read_json(out + "/fit.json");
     }
@@ -475,8 +475,8 @@ TEST(InvertFitJoint, FullBandDiffuseIsModelledByLaterPasses) {
 // A joint fit of `folder`'s full-band captures stopped at two passes (--max-passes 2),
 // which must say that its passes had not settled.
 nlohmann::json fit_stopped_at_two_passes(const TemporaryDirectory& dir, const std::string& folder) {
-  const CommandResult run =
-      glaze("invert-fit " + folder + "/transforms.json --out " + folder + "/stopped --mode joint --max-passes 2", dir);
+  const CommandResult run = run_glaze(
+      "invert-fit " + folder + "/transforms.json --out " + folder + "/stopped --mode joint --max-passes 2", dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("raise --max-passes"), std::string::npos) << run.err;
   const nlohmann::json stopped = read_json(folder + "/stopped/fit.json");
@@ -638,7 +638,7 @@ TEST(InvertFitLighting, BadInputIsReported) {
   // One view: the mirror and the diffuse term cannot be told apart; said, not hidden.
   const std::string one = captures(dir, "white_sphere_office.gltf", "one",
                                    "--integrator sh --ss 1 --res 128x128 --holdout view_1,view_2,novel_0,novel_1");
-  const CommandResult single = glaze("invert-fit " + one + " --mode lighting --out " + dir.file("one_fit"), dir);
+  const CommandResult single = run_glaze("invert-fit " + one + " --mode lighting --out " + dir.file("one_fit"), dir);
   ASSERT_EQ(single.exit_code, 0) << single.err;
   EXPECT_NE(single.err.find("two or more views"), std::string::npos) << single.err;
   const nlohmann::json single_fit = read_json(dir.file("one_fit/fit.json"));
@@ -646,22 +646,23 @@ TEST(InvertFitLighting, BadInputIsReported) {
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(value[c].get<double>()));
   // Too few samples for 25 unknowns, and a set without a material.
   const std::string tiny = captures(dir, "white_sphere_office.gltf", "tiny", "--integrator sh --ss 1 --res 4x4");
-  testing::expect_clear_failure(glaze("invert-fit " + tiny + " --mode lighting --out " + dir.file("x"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + tiny + " --mode lighting --out " + dir.file("x"), dir),
                                 "at least 25 samples");
   nlohmann::json transforms = read_json(one + "/transforms.json");
   transforms.erase("material");
   std::ofstream(one + "/transforms.json") << transforms.dump();
-  testing::expect_clear_failure(glaze("invert-fit " + one + " --mode lighting --out " + dir.file("x"), dir), "--R0");
+  testing::expect_clear_failure(run_glaze("invert-fit " + one + " --mode lighting --out " + dir.file("x"), dir),
+                                "--R0");
   // Half a known material is refused (it would silently take the other half from the set).
-  testing::expect_clear_failure(glaze("invert-fit " + one + " --mode lighting --R0 0.04 --out " + dir.file("x"), dir),
-                                "go together");
+  testing::expect_clear_failure(
+      run_glaze("invert-fit " + one + " --mode lighting --R0 0.04 --out " + dir.file("x"), dir), "go together");
 }
 
 TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
   TemporaryDirectory dir;
   const std::string folder = captures(dir, "red_sphere_office.gltf", "black", "--integrator sh --ss 1 --res 48x48");
   rewrite_frames(folder, [](float, Pcg32&) { return 0.0f; });
-  testing::expect_clear_failure(glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + folder + " --mode material --out " + dir.file("x"), dir),
                                 "black");
 
   const std::string saturated =
@@ -669,9 +670,9 @@ TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
   nlohmann::json transforms = read_json(saturated + "/transforms.json");
   transforms["saturation"] = 1e-6;
   std::ofstream(saturated + "/transforms.json") << transforms.dump(2);
-  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode material --out " + dir.file("y"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + saturated + " --mode material --out " + dir.file("y"), dir),
                                 "saturated");
-  testing::expect_clear_failure(glaze("invert-fit " + saturated + " --mode shiny --out " + dir.file("y"), dir),
+  testing::expect_clear_failure(run_glaze("invert-fit " + saturated + " --mode shiny --out " + dir.file("y"), dir),
                                 "shiny");
 }
 
@@ -681,13 +682,13 @@ TEST(InvertFit, BlackOrSaturatedCapturesGiveClearErrors) {
 TEST(InvertFit, MeshCapturesWarnWithAdviceInvertFitAccepts) {
   TemporaryDirectory dir;
   const std::string folder = captures(dir, "still_life_office.gltf", "still", "--integrator sh --ss 1 --res 48x36");
-  const CommandResult run = glaze("invert-fit " + folder + " --mode material --out " + dir.file("fit"), dir);
+  const CommandResult run = run_glaze("invert-fit " + folder + " --mode material --out " + dir.file("fit"), dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("occlusion and interreflection"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("mask_path"), std::string::npos) << run.err;
   EXPECT_EQ(run.err.find("--integrator"), std::string::npos) << run.err;
   const CommandResult refused =
-      glaze("invert-fit " + folder + " --mode material --integrator path --out " + dir.file("fit2"), dir);
+      run_glaze("invert-fit " + folder + " --mode material --integrator path --out " + dir.file("fit2"), dir);
   EXPECT_EQ(refused.exit_code, 1) << "invert-fit took --integrator; the advice above may name it again";
 }
 
@@ -704,7 +705,7 @@ TEST(InvertFit, MissingEnvironmentOrMaterialNamesTheFileGiven) {
   std::ofstream(folder + "/views.json") << transforms.dump(2);
   for (const char* mode : {"material", "lighting"}) {
     const CommandResult run =
-        glaze("invert-fit " + folder + "/views.json --mode " + mode + " --out " + dir.file(mode), dir);
+        run_glaze("invert-fit " + folder + "/views.json --mode " + mode + " --out " + dir.file(mode), dir);
     testing::expect_clear_failure(run, folder + "/views.json");
     EXPECT_EQ(run.err.find("transforms.json"), std::string::npos) << run.err;
   }

@@ -118,6 +118,17 @@ double largest_error(const nlohmann::json& values, const RGB& truth) {
   return error;
 }
 
+// What the estimate of the ball's reflectance (captures_report.json's "probe") missed by:
+// the reflectance relatively, the joint fit's R0 (signed) and its largest Rd error.
+struct EstimateErrors {
+  double reflectance, joint_R0, joint_Rd;
+};
+EstimateErrors estimate_errors(const nlohmann::json& probe, const SimulatedShoot& truth) {
+  const nlohmann::json& joint = probe["joint_fit"];
+  return {largest_error(probe["reflectance"], RGB::Constant(float(truth.reflectance))) / truth.reflectance,
+          joint["R0"].get<double>() - truth.material.R0(), largest_error(joint["Rd"], truth.material.Rd())};
+}
+
 void expect_shoot_recovered(const std::string& scene, const std::optional<std::string>& environment, bool calibrate,
                             const ShootBounds& bounds) {
   TemporaryDirectory dir;
@@ -164,19 +175,16 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
       run_glaze("captures " + dir.file("shoot") + " --out " + dir.file("estimate"), dir);
   ASSERT_EQ(estimate.exit_code, 0) << estimate.err;
   const nlohmann::json estimated = read_json(dir.file("estimate/captures_report.json"))["probe"];
-  const double reflectance =
-      largest_error(estimated["reflectance"], RGB::Constant(float(truth.reflectance))) / truth.reflectance;
-  EXPECT_LT(reflectance, bounds.reflectance) << estimated.dump();
-  const nlohmann::json& joint = estimated["joint_fit"];
-  const double joint_R0 = joint["R0"].get<double>() - truth.material.R0();
-  const double joint_Rd = largest_error(joint["Rd"], truth.material.Rd());
-  EXPECT_LT(std::abs(joint_R0), bounds.joint_R0);
-  EXPECT_LT(joint_Rd, bounds.joint_Rd);
+  const EstimateErrors errors = estimate_errors(estimated, truth);
+  EXPECT_LT(errors.reflectance, bounds.reflectance) << estimated.dump();
+  EXPECT_LT(std::abs(errors.joint_R0), bounds.joint_R0);
+  EXPECT_LT(errors.joint_Rd, bounds.joint_Rd);
   std::printf(
       "%s under %s: centre %.3f mm, radius %+.3f%%, probe %.2f%% (%d cells), material R0 %+.4f Rd %.4f, "
       "reflectance %.2f%%, joint R0 %+.4f Rd %.4f\n",
       scene.c_str(), environment ? environment->c_str() : "the scene's lighting", 1e3 * center_error,
-      100 * radius_error, 100 * probe_rmse, cells, material_R0, material_Rd, 100 * reflectance, joint_R0, joint_Rd);
+      100 * radius_error, 100 * probe_rmse, cells, material_R0, material_Rd, 100 * errors.reflectance, errors.joint_R0,
+      errors.joint_Rd);
 }
 
 // The bounds below hold each case to the where it meets it, and otherwise to what
@@ -221,15 +229,12 @@ TEST(PhotoShootAcceptance, NoiseFreePhotosMeetTheJointBounds) {
   const testing::CommandResult run = run_glaze("captures " + dir.file("shoot") + " --out " + dir.file("captures"), dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json probe = read_json(dir.file("captures/captures_report.json"))["probe"];
-  const nlohmann::json& joint = probe["joint_fit"];
-  const double joint_R0 = joint["R0"].get<double>() - truth.material.R0();
-  const double joint_Rd = largest_error(joint["Rd"], truth.material.Rd());
-  const double reflectance =
-      largest_error(probe["reflectance"], RGB::Constant(float(truth.reflectance))) / truth.reflectance;
-  std::printf("noise-free photos: joint R0 %+.4f Rd %.4f, reflectance %.2f%%\n", joint_R0, joint_Rd, 100 * reflectance);
-  EXPECT_LT(std::abs(joint_R0), 0.002);
-  EXPECT_LT(joint_Rd, 0.006);
-  EXPECT_LT(reflectance, 0.03) << probe.dump();
+  const EstimateErrors errors = estimate_errors(probe, truth);
+  std::printf("noise-free photos: joint R0 %+.4f Rd %.4f, reflectance %.2f%%\n", errors.joint_R0, errors.joint_Rd,
+              100 * errors.reflectance);
+  EXPECT_LT(std::abs(errors.joint_R0), 0.002);
+  EXPECT_LT(errors.joint_Rd, 0.006);
+  EXPECT_LT(errors.reflectance, 0.03) << probe.dump();
 }
 
 // A shoot that cannot become a capture set is an error naming the file or the folder,

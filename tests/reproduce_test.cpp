@@ -100,11 +100,14 @@ TEST(Reproduce, QuickOfficeAndBlueRoom) {
   EXPECT_GT(spectral, 5 * rgb);
 }
 
-TEST(Reproduce, QuickRealMaps) {
+// Under a real map: St Fagans, whose small bright window panes are where comparing the
+// views through larger stencils failed the joint bounds at this size
+// (docs/notes/cross-view-comparison.md). Lebombo is fitted from simulated photographs
+// (PhotoShootAcceptance) and from noise-free captures (InvertFitJoint).
+TEST(Reproduce, QuickRealMap) {
   GLAZE_REQUIRE_ENVMAP(st_fagans, "st_fagans_interior_1k.hdr");
-  GLAZE_REQUIRE_ENVMAP(lebombo, "lebombo_1k.hdr");
   TemporaryDirectory dir;
-  expect_inverse_bounds(reproduce(dir, st_fagans.string() + "," + lebombo.string()));
+  expect_inverse_bounds(reproduce(dir, st_fagans.string()));
 }
 
 TEST(Reproduce, BadOptionsGiveClearErrors) {

@@ -736,21 +736,6 @@ json renderable_triangle_scene(GltfBuffer& buffer) {
   return gltf;
 }
 
-// `glaze render PATH --out x.exr [extra]` must fail cleanly and mention `word`.
-void expect_cli_error(const testing::TemporaryDirectory& dir, const std::string& path, const std::string& word,
-                      const std::string& extra = "") {
-  const CommandResult run =
-      run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --res 8x8 --spp 1 " + extra, dir);
-  EXPECT_FALSE(run.crashed) << run.err;
-  EXPECT_EQ(run.exit_code, 1) << run.err;
-  const std::string err = without_directory(run.err, dir);
-  const size_t error = err.find("glaze: error:");
-  ASSERT_NE(error, std::string::npos) << run.err;
-  // The error itself (not a warning printed before it) must mention the word.
-  EXPECT_NE(err.find(word, error), std::string::npos) << "'" << word << "' not in the error: " << err;
-  EXPECT_FALSE(std::filesystem::exists(dir.file("x.exr")));
-}
-
 // The unbroken scene renders: the failures below are due to the one fault each.
 TEST(BadScene, TheUnbrokenSceneRenders) {
   testing::TemporaryDirectory dir;
@@ -771,7 +756,7 @@ TEST(BadScene, MissingBufferFile) {
   gltf["buffers"][0]["uri"] = "missing.bin";
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"bad.gltf", "missing.bin"});
-  expect_cli_error(dir, path, "missing.bin");
+  testing::expect_render_refused(dir, path, "missing.bin");
 }
 
 // The same buffer as a real .bin file that is too short (truncated): an error, no crash.
@@ -784,7 +769,7 @@ TEST(BadScene, TruncatedBufferFile) {
   gltf["buffers"][0]["uri"] = "short.bin";
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"bad.gltf"});
-  expect_cli_error(dir, path, "bad.gltf");
+  testing::expect_render_refused(dir, path, "bad.gltf");
 }
 
 // POSITION refers to accessor 7 of 2: the error says "accessor".
@@ -795,13 +780,13 @@ TEST(BadScene, AccessorIndexOutOfRange) {
   gltf["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 7;
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"accessor", "7"});
-  expect_cli_error(dir, path, "accessor");
+  testing::expect_render_refused(dir, path, "accessor");
 
   gltf = renderable_triangle_scene(buffer);
   gltf["meshes"][0]["primitives"][0]["indices"] = 9;  // the index accessor too
   const std::string indices_path = write_gltf(dir, "bad_indices.gltf", gltf);
   expect_load_error(dir, indices_path, {"accessor"});
-  expect_cli_error(dir, indices_path, "accessor");
+  testing::expect_render_refused(dir, indices_path, "accessor");
 }
 
 // Three vertices, an index 5: "out of range".
@@ -815,7 +800,7 @@ TEST(BadScene, IndexValueNotBelowVertexCount) {
   gltf["meshes"][0]["primitives"][0]["indices"] = indices;
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"index 5", "out of range"});
-  expect_cli_error(dir, path, "out of range");
+  testing::expect_render_refused(dir, path, "out of range");
 
   // Exactly the vertex count (3) is one too many.
   GltfBuffer buffer3;
@@ -836,13 +821,13 @@ TEST(BadScene, NodeHierarchyWithACycle) {
   gltf["nodes"][0]["children"] = {2};
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"cycle"});
-  expect_cli_error(dir, path, "cycle");
+  testing::expect_render_refused(dir, path, "cycle");
 
   gltf = renderable_triangle_scene(buffer);
   gltf["nodes"][1]["children"] = {1};
   const std::string self = write_gltf(dir, "self.gltf", gltf);
   expect_load_error(dir, self, {"cycle"});
-  expect_cli_error(dir, self, "cycle");
+  testing::expect_render_refused(dir, self, "cycle");
 }
 
 // A file without "scenes" (every root node is drawn) whose nodes form a cycle 0 -> 1 -> 0,
@@ -871,7 +856,7 @@ TEST(BadScene, MissingTextureImage) {
   gltf["images"] = {{{"uri", "nothere.png"}}};
   const std::string path = write_gltf(dir, "bad.gltf", gltf);
   expect_load_error(dir, path, {"image", "nothere.png"});
-  expect_cli_error(dir, path, "nothere.png");
+  testing::expect_render_refused(dir, path, "nothere.png");
 }
 
 // --camera nope on a good scene: the error names it and lists the camera "main".
@@ -879,7 +864,7 @@ TEST(BadScene, UnknownCameraOnTheCommandLine) {
   testing::TemporaryDirectory dir;
   GltfBuffer buffer;
   const std::string path = write_gltf(dir, "good.gltf", renderable_triangle_scene(buffer));
-  expect_cli_error(dir, path, "nope", "--camera nope");
+  testing::expect_render_refused(dir, path, "nope", "--camera nope");
   const CommandResult run =
       run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --camera nope", dir);
   EXPECT_NE(without_directory(run.err, dir).find("main"), std::string::npos) << run.err;
@@ -890,7 +875,7 @@ TEST(BadScene, NonExistentScenePath) {
   testing::TemporaryDirectory dir;
   const std::string path = dir.file("absent.gltf");
   expect_load_error(dir, path, {"absent.gltf", "no such"});
-  expect_cli_error(dir, path, "absent.gltf");
+  testing::expect_render_refused(dir, path, "absent.gltf");
 }
 
 // A .gltf that is not JSON, and an empty one.
@@ -898,10 +883,10 @@ TEST(BadScene, FileThatIsNotJson) {
   testing::TemporaryDirectory dir;
   const std::string path = write_text(dir, "text.gltf", "this is not { json at all, just some words\n");
   expect_load_error(dir, path, {"text.gltf", "glTF"});
-  expect_cli_error(dir, path, "text.gltf");
+  testing::expect_render_refused(dir, path, "text.gltf");
   const std::string empty = write_text(dir, "empty.gltf", "");
   expect_load_error(dir, empty, {"empty.gltf"});
-  expect_cli_error(dir, empty, "empty.gltf");
+  testing::expect_render_refused(dir, empty, "empty.gltf");
 }
 
 // ---------------------------------------------------------------------------------------

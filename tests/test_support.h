@@ -146,6 +146,21 @@ inline void expect_clear_failure(const CommandResult& run, const std::string& mu
   EXPECT_NE(run.err.find(must_mention), std::string::npos) << run.err;
 }
 
+// `glaze render PATH --out x.exr [extra]` must fail cleanly and mention `word`.
+inline void expect_render_refused(const TemporaryDirectory& dir, const std::string& path, const std::string& word,
+                                  const std::string& extra = "") {
+  const CommandResult run =
+      run_glaze("render " + quoted(path) + " --out " + quoted(dir.file("x.exr")) + " --res 8x8 --spp 1 " + extra, dir);
+  EXPECT_FALSE(run.crashed) << run.err;
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  const std::string err = without_directory(run.err, dir);
+  const size_t error = err.find("glaze: error:");
+  ASSERT_NE(error, std::string::npos) << run.err;
+  // The error itself (not a warning printed before it) must mention the word.
+  EXPECT_NE(err.find(word, error), std::string::npos) << "'" << word << "' not in the error: " << err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.exr")));
+}
+
 // The repository's scenes/ folder, with a trailing slash.
 inline std::string scenes_dir() { return std::string(GLAZE_SOURCE_DIR) + "/scenes/"; }
 

@@ -130,10 +130,11 @@ double film_curve(double signal) {
 
 double film_curve_inverse(double v) { return std::pow(-std::log(1.0 - v / 1.06) / 3.0, 1.0 / 0.7); }
 
-PhotoCodes photograph(const Image& radiance, double seconds, const CameraModel& camera, uint64_t seed, uint64_t photo) {
-  PhotoCodes codes{radiance.width, radiance.height, camera.bits, camera.bits == 16,
-                   std::vector<uint16_t>(radiance.pixels.size())};
-  const double top = camera.bits == 16 ? 65535.0 : 255.0;
+PhotoCodes photograph(const Image& radiance, double seconds, const CameraModel& camera, int bits, uint64_t seed,
+                      uint64_t photo) {
+  if (bits != 8 && bits != 16) throw Error("internal: photographs are 8- or 16-bit, not " + std::to_string(bits));
+  PhotoCodes codes{radiance.width, radiance.height, bits, bits == 16, std::vector<uint16_t>(radiance.pixels.size())};
+  const double top = bits == 16 ? 65535.0 : 255.0;
   tbb::parallel_for(0, radiance.height, [&](int y) {
     // One stream a row, keyed by the photo: the codes do not depend on the threads.
     Pcg32 rng(seed, (photo << 24) + uint64_t(y));
@@ -145,7 +146,7 @@ PhotoCodes photograph(const Image& radiance, double seconds, const CameraModel& 
       double electrons = std::max(0.0, double(radiance.pixels[i]) * seconds) * camera.full_well;
       if (camera.noise) electrons += std::sqrt(electrons) * gaussian() + camera.read_noise * gaussian();
       const double signal = std::clamp(electrons / camera.full_well, 0.0, 1.0);
-      codes.codes[i] = uint16_t(std::lround(top * (camera.bits == 16 ? signal : film_curve(signal))));
+      codes.codes[i] = uint16_t(std::lround(top * (bits == 16 ? signal : film_curve(signal))));
     }
   });
   return codes;
@@ -414,12 +415,12 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
   create_output_folder(options.out, "the shoot folder");
   if (std::filesystem::exists(options.out / "shoot.json"))
     throw Error(options.out.string() + ": already holds a shoot (shoot.json); give a new folder to --out");
-  CameraModel camera_model = options.camera;
-  camera_model.bits = options.format == "png16" ? 16 : 8;
+  const CameraModel& camera_model = options.camera;
+  const int bits = options.format == "png16" ? 16 : 8;
   const std::string extension = options.format == "jpg" ? ".jpg" : ".png";
   // The middle exposure puts the first view's median radiance at the middle code.
-  const double middle_signal = camera_model.bits == 16 ? 0.5 : film_curve_inverse(128.0 / 255.0);
-  shoot.hdr_unit = RGB::Constant(float(camera_model.bits == 16 ? 1.0 : 1.0 / middle_signal));
+  const double middle_signal = bits == 16 ? 0.5 : film_curve_inverse(128.0 / 255.0);
+  shoot.hdr_unit = RGB::Constant(float(bits == 16 ? 1.0 : 1.0 / middle_signal));
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   uint64_t photo = 0;
@@ -429,8 +430,8 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
     arena.execute([&] {
       const Image hdr = render(board_renderer, camera, board_options, index).image;
       const double white = luminance_quantile(hdr, 0.98);
-      const double seconds = (camera_model.bits == 16 ? 0.9 : film_curve_inverse(230.0 / 255.0)) / white;
-      write_photo_codes(file.string(), photograph(hdr, seconds, camera_model, options.seed, photo++));
+      const double seconds = (bits == 16 ? 0.9 : film_curve_inverse(230.0 / 255.0)) / white;
+      write_photo_codes(file.string(), photograph(hdr, seconds, camera_model, bits, options.seed, photo++));
     });
   };
   if (!calibration.empty()) create_output_folder(options.out / "calibration", "the calibration photos");
@@ -464,7 +465,7 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
       const std::string file = "bracket_" + std::to_string(k) + extension;
       arena.execute([&] {
         write_photo_codes((folder / file).string(),
-                          photograph(hdr, shoot.exposures[k], camera_model, options.seed, photo++));
+                          photograph(hdr, shoot.exposures[k], camera_model, bits, options.seed, photo++));
       });
       times[file] = shoot.exposures[k];
     }
@@ -515,7 +516,7 @@ SimulatedShoot simulate_shoot(const ShootSimulation& options) {
                  {{"full_well", camera_model.full_well},
                   {"read_noise", camera_model.read_noise},
                   {"noise", camera_model.noise},
-                  {"bits", camera_model.bits},
+                  {"bits", bits},
                   {"seed", options.seed}}},
                 {"views", json::array()}};
   for (const SimulatedView& view : shoot.views) truth["views"].push_back(camera_json(view));

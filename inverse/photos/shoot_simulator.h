@@ -52,7 +52,6 @@ struct CameraModel {
   double full_well = 30000.0;  // electrons at the top of the range (signal 1)
   double read_noise = 4.0;     // electrons, RMS
   bool noise = true;
-  int bits = 8;  // 8: through the tone curve; 16: linear codes
 };
 
 // The film-like tone curve, code / 255 for a signal s (1 = the full well): 1.06 (1 -
@@ -63,8 +62,10 @@ double film_curve(double signal);
 double film_curve_inverse(double v);
 
 // `radiance` (linear, any size) photographed for `seconds`: signal = radiance x seconds,
-// with `camera`'s noise from streams keyed by (seed, photo), codes per channel.
-PhotoCodes photograph(const Image& radiance, double seconds, const CameraModel& camera, uint64_t seed, uint64_t photo);
+// with `camera`'s noise from streams keyed by (seed, photo), codes per channel: 8-bit
+// through the tone curve, or 16-bit linear (`bits`).
+PhotoCodes photograph(const Image& radiance, double seconds, const CameraModel& camera, int bits, uint64_t seed,
+                      uint64_t photo);
 
 // A chessboard as a matte, textured quad in the z = 0 plane of its own frame, facing +z:
 // inner corner (i, j) at (i, j, 0) squares, a white margin one square wide around the
@@ -101,7 +102,7 @@ struct ShootSimulation {
   int exposures = 7;
   double ev_step = 2.0;
   std::string format = "png";  // png, jpg (8-bit through the curve) or png16 (16-bit linear)
-  CameraModel camera;          // its `bits` are the format's: simulate_shoot sets them
+  CameraModel camera;          // the codes' bits are the format's
   uint64_t seed = 0;
   int threads = 0;  // 0: all cores
 

@@ -212,14 +212,14 @@ Cone circle_cone(const PinholeCamera& camera, const Vec2d& centre, double radius
   return {apex, axis, sum / kPoints};
 }
 
-struct Sphere {
+struct TangentSphere {
   Vec3d center;
   double radius;
 };
 
 // The sphere both cones are tangent to, from the closest approach of their axes; nothing
 // when they do not meet in front of both cameras or disagree about its size.
-std::optional<Sphere> intersect_cones(const Cone& a, const Cone& b) {
+std::optional<TangentSphere> intersect_cones(const Cone& a, const Cone& b) {
   const Vec3d w = a.apex - b.apex;
   const double c = a.axis.dot(b.axis), d = a.axis.dot(w), e = b.axis.dot(w), denominator = 1.0 - c * c;
   if (denominator < 1e-6) return std::nullopt;  // parallel axes
@@ -230,7 +230,7 @@ std::optional<Sphere> intersect_cones(const Cone& a, const Cone& b) {
   const double rb = (center - b.apex).norm() * std::sin(b.half_angle);
   const double radius = 0.5 * (ra + rb);
   if (std::abs(ra - rb) > 0.3 * radius || (pa - pb).norm() > radius) return std::nullopt;
-  return Sphere{center, radius};
+  return TangentSphere{center, radius};
 }
 
 // Circle candidates in a view (film coordinates, pixels): Hough circles on its blurred
@@ -256,7 +256,7 @@ std::vector<Vec3d> circle_candidates(const EdgeImage& image) {
 }
 
 // The fraction of the sphere's outline in `view` where an edge lies within `reach`.
-double outline_support(const EdgeImage& image, const PinholeCamera& camera, const Sphere& sphere, double reach,
+double outline_support(const EdgeImage& image, const PinholeCamera& camera, const TangentSphere& sphere, double reach,
                        const SphereOutlineOptions& options) {
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, 32);
   if (samples.points.empty()) return 0.0;
@@ -294,7 +294,7 @@ struct ViewEdges {
   int samples = 0;
 };
 
-ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, const Sphere& sphere, double reach,
+ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, const TangentSphere& sphere, double reach,
                        const SphereOutlineOptions& options) {
   ViewEdges edges;
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, options.outline_samples);
@@ -311,7 +311,7 @@ ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, cons
   return edges;
 }
 
-double residual_px(const ViewEdges& edges, size_t k, const Sphere& sphere, double pixels_per_radian) {
+double residual_px(const ViewEdges& edges, size_t k, const TangentSphere& sphere, double pixels_per_radian) {
   const ConeResidual cost{edges.origins[k], edges.directions[k], pixels_per_radian};
   double residual = std::numeric_limits<double>::quiet_NaN();
   cost(sphere.center.data(), &sphere.radius, &residual);
@@ -320,9 +320,9 @@ double residual_px(const ViewEdges& edges, size_t k, const Sphere& sphere, doubl
 
 // Centre and radius by least squares over every view's edges that `keep` accepts.
 template <typename Keep>
-Sphere fit_cones(const std::vector<ViewEdges>& views, const std::vector<SphereView>& input, const Sphere& seed,
-                 Keep keep, std::string* summary_line) {
-  Sphere sphere = seed;
+TangentSphere fit_cones(const std::vector<ViewEdges>& views, const std::vector<SphereView>& input,
+                        const TangentSphere& seed, Keep keep, std::string* summary_line) {
+  TangentSphere sphere = seed;
   ceres::Problem problem;
   for (size_t v = 0; v < views.size(); ++v)
     for (size_t k = 0; k < views[v].origins.size(); ++k) {
@@ -351,7 +351,7 @@ Sphere fit_cones(const std::vector<ViewEdges>& views, const std::vector<SphereVi
   return sphere;
 }
 
-std::string millimetres(const Sphere& sphere) {
+std::string millimetres(const TangentSphere& sphere) {
   std::ostringstream text;
   text.precision(1);
   text << std::fixed << "centre (" << 1e3 * sphere.center.x() << ", " << 1e3 * sphere.center.y() << ", "
@@ -360,8 +360,8 @@ std::string millimetres(const Sphere& sphere) {
 }
 
 // The sphere of the two views' circles that all views' images support best.
-Sphere initial_sphere(const std::vector<SphereView>& views, const std::vector<EdgeImage>& images,
-                      const SphereOutlineOptions& options) {
+TangentSphere initial_sphere(const std::vector<SphereView>& views, const std::vector<EdgeImage>& images,
+                             const SphereOutlineOptions& options) {
   std::vector<std::vector<Cone>> cones(views.size());
   for (size_t v = 0; v < views.size(); ++v) {
     for (const Vec3d& circle : circle_candidates(images[v]))
@@ -370,7 +370,7 @@ Sphere initial_sphere(const std::vector<SphereView>& views, const std::vector<Ed
       throw Error(views[v].name + ": no round outline found that could be the sphere; check that the sphere is " +
                   "whole in the picture, in focus and stands out from the background, or give the view a mask");
   }
-  std::optional<Sphere> best;
+  std::optional<TangentSphere> best;
   double best_score = -1.0;
   for (size_t a = 0; a < views.size(); ++a)
     for (size_t b = a + 1; b < views.size(); ++b)
@@ -439,7 +439,7 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
       throw Error(view.name + ": the image, its alpha and its mask must have the same, non-zero size");
     images.emplace_back(view, options.blur_pixels);
   }
-  Sphere sphere = initial_sphere(views, images, options);
+  TangentSphere sphere = initial_sphere(views, images, options);
 
   std::vector<ViewEdges> edges(views.size());
   std::string summary;
