@@ -187,27 +187,30 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
       errors.joint_Rd);
 }
 
-// The bounds below hold each case to the where it meets it, and otherwise to what
-// it measures with a margin. The joint fit and the reflectance estimate miss theirs on
-// these 8-bit photos and meet them on noise-free 16-bit linear ones (the last test): the
-// recovered response's bias under the codes' noise and quantisation, then the noise
-// itself, take them beyond (docs/notes/photo-shoots.md, "What limits them").
-// Measured in the office: the probe 4.0%, Rd under it 0.0069, the reflectance 5.3% and
-// the joint fit R0 +0.0007, Rd 0.0115.
+// The bounds below hold each case to the where it meets it with a margin, and
+// otherwise to what it measures with a margin (the simulation is deterministic, but
+// another CPU rounds differently). The joint fit and the reflectance estimate miss
+// theirs on these 8-bit photos and meet them on noise-free 16-bit linear ones (the last
+// test): the photo chain takes them beyond, and even the true camera response leaves
+// the joint fit's Rd there (measured on three of these shoots: docs/notes/photo-shoots.md,
+// "What limits them").
+// Measured in the office: the probe 4.0%, Rd under it 0.0049, the reflectance 4.5% and
+// the joint fit R0 +0.0008, Rd 0.024.
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {
-  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.065, 0.002, 0.016});
+  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.055, 0.002, 0.03});
 }
-// Measured: the probe 3.7%, the reflectance 5.3%, the joint fit R0 +0.0012 and Rd 0.039.
+// Measured: the probe 3.7%, the reflectance 5.0%, the joint fit R0 +0.0019 (the issue's
+// 0.002, met with too little margin to assert) and Rd 0.017.
 TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
-  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.065, 0.002, 0.05});
+  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.06, 0.0025, 0.025});
 }
-// Under lebombo: measured, the probe 2.9%, the reflectance 3.5%, the joint R0 -0.0007
-// and Rd 0.033.
+// Under lebombo: measured, the probe 2.9%, the reflectance 2.9% (the 3%, met
+// with too little margin to assert), the joint R0 -0.0008 and Rd 0.026.
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.045, 0.002, 0.042});
+  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.035, 0.002, 0.035});
 }
-// Measured: the probe 3.0%, the reflectance 5.6%, the joint R0 -0.0023 and Rd 0.039.
+// Measured: the probe 2.9%, the reflectance 5.7%, the joint R0 -0.0021 and Rd 0.039.
 TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
   expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.07, 0.003, 0.05});

@@ -5,11 +5,13 @@
 // tone curve. Debevec and Malik (1997) recover g = ln f^-1 from pixels seen at several
 // known exposures: least squares over g(Z_ij) = ln E_i + ln t_j with a hat weight and a
 // smoothness term on g'', here over all brackets of a shoot at once (each with its own
-// exposure times: OpenCV's CalibrateDebevec takes one bracket), on sample pixels. On the
-// synthetic brackets of the tests it is twice as accurate as OpenCV's CalibrateDebevec
-// and CalibrateRobertson, and a plain Robertson et al. (2003) iteration did not settle
-// (docs/notes/hdr-merge.md). 16-bit and raw photos are linear: their response is the
-// identity.
+// exposure times: OpenCV's CalibrateDebevec takes one bracket), on sample pixels, then
+// refined once by regressing the codes on the exposures that curve gives the samples
+// (Debevec and Malik's regression, of g on the noisy codes, is biased where g is steep).
+// On the synthetic brackets of the tests it is several times as accurate as OpenCV's
+// CalibrateDebevec and CalibrateRobertson, and a plain Robertson et al. (2003) iteration
+// did not settle (docs/notes/hdr-merge.md). 16-bit and raw photos are linear: their
+// response is the identity.
 #pragma once
 
 #include "inverse/photos/bracket.h"
