@@ -166,8 +166,11 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
     }
   }
   if (!(highest > lowest)) return;
-  // f on knots over the exposures that gave unclipped codes, and one beyond each end.
-  const double step = 1.0 / kKnotsPerUnit, start = lowest - step;
+  // f on knots over the exposures that gave unclipped codes, and one beyond each end; at
+  // most kMaxKnots of them (the solve is dense), coarser for a range of exposure times
+  // beyond a camera's (over 100 units of ln exposure: 43 decades).
+  constexpr double kMaxKnots = 1000.0;
+  const double step = std::max(1.0 / kKnotsPerUnit, (highest - lowest) / kMaxKnots), start = lowest - step;
   const int knots = int(std::ceil((highest - start) / step)) + 2;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(knots, knots);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(knots);
