@@ -52,10 +52,8 @@ int demo_photos(const DemoCommandOptions& args, const std::filesystem::path& out
   std::fflush(stdout);
   // A board of 15 mm squares (1.5 sphere diameters along a row), framed to fill the
   // picture, leaves the sphere about 90 px in radius at 640x480: the probe needs the ball
-  // that large (docs/notes/light-probe.md). 4 samples a pixel: the board photos are lit
-  // by a uniform light (simulate-shoot), which that renders with little noise besides
-  // the simulated camera's own.
-  std::vector<std::string> simulate = {scene, "--out", shoot, "--square", "0.015", "--board-spp", "4"};
+  // that large (docs/notes/light-probe.md).
+  std::vector<std::string> simulate = {scene, "--out", shoot, "--square", "0.015"};
   if (args.resolution) simulate.insert(simulate.end(), {"--res", to_string(*args.resolution)});
   command_simulate_shoot(simulate);
   std::printf("\n2. captures: HDR merge, registration, the sphere, the light probe -> %s\n", captures.c_str());

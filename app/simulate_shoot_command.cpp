@@ -71,7 +71,8 @@ CommandRun declare_simulate_shoot(CLI::App& app) {
   add_text(app, "--board COLSxROWS", args->board, "the chessboard's inner corners, one count even, one odd");
   add_real(app, "--square M", s.board.square, "the board's square in metres (0: 3 sphere diameters a row)", 0.0f,
            100.0f);
-  add_integer(app, "--board-spp N", s.board_spp, 1, 4096, "path-traced samples per pixel of the board photos");
+  add_integer(app, "--board-ss K", s.board_supersampling, 1, 32,
+              "the board photos' K x K samples a pixel (4K x 4K on the squares' edges, at most 32 x 32)");
   add_integer(app, "--calibration N", s.calibration_photos, 0, 1000,
               "board photos in varied poses (SHOOT/calibration) for the registration to calibrate from");
   add_integer(app, "--exposures N", s.exposures, 2, 64, "photos per bracket");
@@ -81,7 +82,7 @@ CommandRun declare_simulate_shoot(CLI::App& app) {
   add_real(app, "--full-well E", s.camera.full_well, "electrons at saturation", 100.0f, 1e7f);
   add_real(app, "--read-noise E", s.camera.read_noise, "read noise, electrons RMS", 0.0f, 1e4f);
   app.add_flag("--no-noise", args->no_noise, "photos without shot and read noise");
-  add_seed(app, s.seed, "random seed of the noise and the board's path tracing");
+  add_seed(app, s.seed, "random seed of the camera's noise");
   app.add_flag("--no-probe", args->no_probe, "no mirror-ball photos (probe_NNN)");
   add_real(app, "--ball-radius M", s.ball_radius, "the mirror ball's radius (0: the sphere's)", 0.0f, 100.0f);
   add_real(app, "--reflectance R", s.reflectance, "the mirror ball's reflectance", 0.01f, 1.0f);

@@ -225,7 +225,7 @@ void refine_row(const SampleShader& shader, const std::vector<RefinedPixel>& ref
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,
                 const PinholeCamera& camera, const ShIntegratorOptions& options) {
   check_options(options);
-  if (!scene.is_single_convex_object()) {
+  if (options.warn_when_inexact && !scene.is_single_convex_object()) {
     warn_once(scene.path +
               ": the sh integrator assumes a single convex object under distant light; "
               "it ignores the occlusion and interreflection of this scene (" +

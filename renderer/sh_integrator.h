@@ -37,6 +37,9 @@ struct ShIntegratorOptions {
   // What the warning for a scene it is not exact for (not one convex object) advises: the
   // calling command's alternative.
   std::string approximation_advice = "use --integrator path";
+  // False for a scene that the caller knows to be exact although it is not one convex
+  // object: nothing occludes the light of any visible point (a flat board on a flat table).
+  bool warn_when_inexact = true;
 };
 
 Image render_sh(const Scene& scene, const RayTracer& tracer, const Environment& environment,

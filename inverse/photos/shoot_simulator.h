@@ -7,8 +7,9 @@
 //
 //   calibration/board_K.png the board alone in varied poses, as registration calibrates from
 //   view_NNN/board.png      the board (a matte textured quad on a dark table) without the
-//                           sphere, path traced under a uniform light of the environment's
-//                           mean, photographed at one exposure (the paper below clipping)
+//                           sphere, under a uniform light of the environment's mean (the
+//                           sh integrator, exact there), photographed at one exposure (the
+//                           paper below clipping)
 //   view_NNN/bracket_K.png  the sphere without the board, rendered once in HDR by the sh
 //                           integrator (exact for a lone sphere), then photographed at
 //                           each exposure; exposures.json gives the times
@@ -96,7 +97,10 @@ struct ShootSimulation {
   LensDistortion lens;       // opencv model expected, as registration recovers it
 
   BoardSpec board{9, 6, 0.0};  // square 0: the squares span 3 sphere diameters along a row
-  int board_spp = 16;
+  // The board photos' K x K samples a pixel, 4K x 4K (at most 32 x 32) where an edge
+  // crosses the pixel: a camera integrates each pixel's area, and the corners' positions
+  // follow from the edge pixels' coverage.
+  int board_supersampling = 4;
   int calibration_photos = 8;  // calibration/board_K: the board alone in varied poses
 
   int exposures = 7;
