@@ -40,14 +40,8 @@ struct SphereOutlineOptions {
   int refinements = 4;         // detect-and-fit rounds
   double blur_pixels = 0.5;    // Gaussian sigma on the image, against noise
   double min_contrast = 0.05;  // weakest edge (log step over a pixel, in one channel) that counts
-  // Where a coated sphere's outline lies on the profile across its rim: this fraction of
-  // the way from the background's level to the sphere's, each taken 1.5 px from the edge.
-  // Its rim is no step: at grazing angles the coat mirrors the background just behind it
-  // (the Fresnel factor tends to 1), and the sphere's own shade rises over a pixel or two
-  // inside. Measured on renders (docs/notes/sphere-outline.md); a mask's edge is halfway.
-  double rim_level = 0.33;
-  double min_found = 0.3;     // fraction of a view's outline that must show an edge
-  double disagreement = 4.0;  // a view whose RMS exceeds this times the others' (and 1 px) disagrees
+  double min_found = 0.3;      // fraction of a view's outline that must show an edge
+  double disagreement = 4.0;   // a view whose RMS exceeds this times the others' (and 1 px) disagrees
 };
 
 // One view's share in the fit.
