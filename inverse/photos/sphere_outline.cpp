@@ -33,11 +33,13 @@ class RimProfile {
     root_.resize(kTable + 1), ramp_.resize(kTable + 1);
     constexpr double kTap = 1.0 / 64.0;
     const int taps = int(std::ceil(4.0 * sigma / kTap));
+    std::vector<double> weight(2 * taps + 1);  // the Gaussian's taps, the same for every x
+    for (int k = -taps; k <= taps; ++k) weight[k + taps] = std::exp(-0.5 * (k * kTap) * (k * kTap) / (sigma * sigma));
     for (int i = 0; i <= kTable; ++i) {
       const double x = -kReach + 2.0 * kReach * i / kTable;
       double root = 0.0, ramp = 0.0, total = 0.0;
       for (int k = -taps; k <= taps; ++k) {
-        const double tau = k * kTap, w = std::exp(-0.5 * tau * tau / (sigma * sigma)), inside = std::max(0.0, tau - x);
+        const double w = weight[k + taps], inside = std::max(0.0, k * kTap - x);
         root += w * std::sqrt(inside), ramp += w * inside, total += w;
       }
       root_[i] = root / total, ramp_[i] = ramp / total;
