@@ -115,12 +115,13 @@ class ReflectedMesh {
 
 namespace {
 
-// The 5 x 5 stencils' test of fit (quadratic_weights): the misfit's chi-square may exceed
-// its degrees of freedom by this many of its standard deviations (10: about four times
-// the noise's misfit through 25 pixels). It is there to catch detail far above the noise:
-// a small lamp's reflection fails it at any width from 3 to 30, while at 3 the blue room's
-// lamps fail it too at low resolutions, where the wider stencil's averaging is what holds
-// R0 (docs/notes/studio-lamps.md, "The test's width").
+// The stencils' test of fit on captures with noise (quadratic_weights): the misfit's
+// chi-square may exceed its degrees of freedom by this many of its standard deviations
+// (10: a chi-square about four times its mean through 25 pixels, nine times through 9,
+// which the noise alone exceeds about once in 10^5). It is there to catch detail far
+// above the noise: a small lamp's reflection fails it at any width from 3 to 30, while at
+// 3 the blue room's lamps fail it too at low resolutions, where the wider stencil's
+// averaging is what holds R0 (docs/notes/studio-lamps.md, "The test's width").
 constexpr double kGoodness = 10.0;
 
 }  // namespace
@@ -172,8 +173,8 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
         s.count = 3;
         std::copy(corners.begin(), corners.end(), s.member.begin());
         std::copy(weights.begin(), weights.end(), s.weight.begin());
-        interpolate_quadratically(meshes_[f], samples, steps, uint32_t(k), !data.noise_free, s);
-        found[k - begin].push_back(s);
+        if (interpolate_quadratically(meshes_[f], samples, steps, uint32_t(k), !data.noise_free, s))
+          found[k - begin].push_back(s);
       }
     });
     for (size_t k = begin; k < end; ++k)
@@ -189,23 +190,24 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
         "fit needs views from several directions");
 }
 
-void CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
+bool CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample,
-                                                bool average_noise, Stencil& s) const {
+                                                bool with_noise, Stencil& s) const {
   // Around the corner nearest r: 5 x 5 pixels where the captures have noise and the
   // other view sees r nearer its normal than the sample does (F smaller there, whatever
   // R0 is: the header says why), and where that fails 3 x 3.
   const int nearest = int(std::max_element(s.weight.begin(), s.weight.begin() + 3) - s.weight.begin());
   const uint32_t corner = s.member[nearest];
-  if (average_noise && data_.mu[corner] > data_.mu[sample] &&
-      quadratic_weights(mesh, samples, steps, sample, corner, 2, s))
-    return;
-  quadratic_weights(mesh, samples, steps, sample, corner, 1, s);
+  if (with_noise && data_.mu[corner] > data_.mu[sample] &&
+      quadratic_weights(mesh, samples, steps, sample, corner, 2, with_noise, s) == StencilFit::fitted)
+    return true;
+  return quadratic_weights(mesh, samples, steps, sample, corner, 1, with_noise, s) != StencilFit::unresolved;
 }
 
-bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
-                                        const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, uint32_t corner,
-                                        int reach, Stencil& s) const {
+CrossViewSystem::StencilFit CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
+                                                               const std::vector<std::array<Vec3, 2>>& steps,
+                                                               uint32_t sample, uint32_t corner, int reach,
+                                                               bool test_fit, Stencil& s) const {
   // All the pixels but at most one: six unknowns, and some to spare against a degenerate
   // layout at the object's edge.
   const Vec2& film = samples.samples[corner].film;
@@ -215,7 +217,7 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
     for (int di = -reach; di <= reach; ++di)
       if (const int64_t k = mesh.pixels().sample_at(int(film.x()) + di, int(film.y()) + dj); k >= 0)
         members[n++] = uint32_t(k);
-  if (n < (2 * reach + 1) * (2 * reach + 1) - 1) return false;
+  if (n < (2 * reach + 1) * (2 * reach + 1) - 1) return StencilFit::degenerate;
   // Coordinates on the plane tangent at r (the central projection, as the triangles'
   // barycentric weights use). A pixel modelled by K x K rays at the centres of its K x K
   // cells (footprint.h) has a footprint of (K^2 - 1) / (12 K^2) pixels^2 per film axis;
@@ -237,7 +239,7 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
   for (int m = 0; m < n; ++m) {
     const Eigen::Vector3d q = data_.reflected[members[m]].cast<double>();
     const double along = q.dot(r);
-    if (!(along > 0.5)) return false;
+    if (!(along > 0.5)) return StencilFit::degenerate;
     const double u = q.dot(e1) / along, v = q.dot(e2) / along;
     const Eigen::Matrix2d S = covariance(members[m]);
     A.row(m) << 1.0, u, v, 0.5 * (u * u + S(0, 0)), u * v + S(0, 1), 0.5 * (v * v + S(1, 1));
@@ -248,20 +250,21 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
   // The weights are A (A^T A)^-1 target, the quadratic's value through the records; the
   // columns scaled to unit norm so that the conditioning test means something.
   const Eigen::Matrix<double, 6, 1> norms = A.colwise().norm().transpose();
-  if (!(norms.minCoeff() > 0.0)) return false;
+  if (!(norms.minCoeff() > 0.0)) return StencilFit::degenerate;
   const Eigen::Matrix<double, Eigen::Dynamic, 6> scaled = A * norms.cwiseInverse().asDiagonal();
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> normal(scaled.transpose() * scaled);
   if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 1e-8 * normal.vectorD().maxCoeff()))
-    return false;
+    return StencilFit::degenerate;
   const Eigen::VectorXd weights = scaled * normal.solve(target.cwiseQuotient(norms));
-  if (!weights.allFinite()) return false;
-  // The wider stencil averages the other view's noise only where the quadratic is the
-  // lighting there: its misfit through the records must be the noise's (chi-square with
-  // n - 6 degrees of freedom, in units of the noise model; kGoodness standard deviations
-  // above its mean). Where the lighting has detail the 5 x 5 pixels do not resolve, the
-  // wider quadratic smooths it by an amount that changes with n.v as F does (a grazing
-  // view's pixels span more of it) and biases R0; the 3 x 3 then follows it closer.
-  if (reach > 1) {
+  if (!weights.allFinite()) return StencilFit::degenerate;
+  // The quadratic stands for the lighting only where its misfit through the records is
+  // the noise's (chi-square with n - 6 degrees of freedom, in units of the noise model;
+  // kGoodness standard deviations above its mean). Where the lighting has detail the
+  // pixels do not resolve, the quadratic smooths it by an amount that changes with n.v
+  // as F does (a grazing view's pixels span more of it) and biases R0: a 5 x 5 stencil
+  // then gives way to the 3 x 3, which follows the detail closer, and a 3 x 3 that fails
+  // too leaves the pair out.
+  if (test_fit) {
     Eigen::Matrix<double, Eigen::Dynamic, 3> records(n, 3);
     for (int m = 0; m < n; ++m) records.row(m) = data_.observed[members[m]].cast<double>().matrix().transpose();
     const Eigen::Matrix<double, Eigen::Dynamic, 3> misfit =
@@ -270,12 +273,12 @@ bool CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleS
     for (int c = 0; c < 3; ++c) {
       double chi2 = 0.0;
       for (int m = 0; m < n; ++m) chi2 += misfit(m, c) * misfit(m, c) / double(data_.noise[members[m]][c]);
-      if (!(chi2 < bound)) return false;
+      if (!(chi2 < bound)) return StencilFit::unresolved;
     }
   }
   s.count = uint32_t(n);
   for (int m = 0; m < n; ++m) s.member[m] = members[m], s.weight[m] = float(weights(m));
-  return true;
+  return StencilFit::fitted;
 }
 
 std::vector<double> CrossViewSystem::inverse_fresnel(double R0) const {

@@ -44,10 +44,15 @@
 // "5 x 5 stencils where the other view sees the direction nearer its normal").
 //
 // Where the lighting has detail finer than the sample spacing (a window's edge, a small
-// lamp) no interpolation is right and the equation does not hold; such pairs are
-// outliers, which a robust reweighting (Cauchy's) down-weights; on noise-free captures
-// with a band-limited diffuse term, where they are the only misfit, a trimming then
-// drops them (cross_view.cpp, kTrim).
+// lamp) no interpolation is right and the equation does not hold. On captures with noise
+// a pair is left out where the quadratic misfits even the 3 x 3 pixels by more than their
+// noise (the same test): a robust loss would only down-weight it, and with the loss's
+// scale set by the noise, a misfit of a few noise levels still pulls, with the sign that
+// F's change with n.v gives it, so that R0 comes out high wherever a view sees a lamp
+// near its normal. The pairs whose misfit stays within the noise are outliers, which a
+// robust reweighting (Cauchy's) down-weights; on noise-free captures with a band-limited
+// diffuse term, where they are the only misfit, a trimming then drops them
+// (cross_view.cpp, kTrim).
 #pragma once
 
 #include "inverse/lighting_fit.h"
@@ -131,21 +136,24 @@ class CrossViewSystem {
     size_t first;
   };
   // Replaces the stencil's linear weights on its triangle by the quadratic's on the 5 x 5
-  // pixels around the corner nearest r (with `average_noise`, where the other view sees r
-  // nearer its normal than `sample` does and the quadratic fits them: see above), else or
-  // where that fails on the 3 x 3; leaves it as it is where too few pixels exist or their
-  // quadratic is ill-conditioned. `steps`: per sample, the change of its reflected
-  // direction per pixel along the film's x and y.
-  void interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
-                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool average_noise,
+  // pixels around the corner nearest r (`with_noise`: where the other view sees r nearer
+  // its normal than `sample` does and the quadratic fits them: see above), else or where
+  // that fails on the 3 x 3; leaves it as it is where too few pixels exist or their
+  // quadratic is ill-conditioned. False where the pair is left out: `with_noise`, and the
+  // 3 x 3 pixels' quadratic misfits them by more than their noise (the lighting has
+  // detail there that no interpolation between the pixels recovers). `steps`: per
+  // sample, the change of its reflected direction per pixel along the film's x and y.
+  bool interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
+                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool with_noise,
                                  Stencil& s) const;
   // The quadratic's weights on the (2 reach + 1)^2 pixels around `corner` (the other
-  // view's sample nearest r), written to `s`; false, leaving `s` as it is, where too few
-  // exist, their quadratic is ill-conditioned, or (reach 2) it misfits them by more than
-  // their noise (data.noise).
-  bool quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
-                         const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, uint32_t corner, int reach,
-                         Stencil& s) const;
+  // view's sample nearest r), written to `s` where `fitted`; `degenerate` where too few
+  // pixels exist or their quadratic is ill-conditioned, `unresolved` where (`test_fit`)
+  // it misfits them by more than their noise (data.noise). Either leaves `s` as it is.
+  enum class StencilFit { fitted, degenerate, unresolved };
+  StencilFit quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,
+                               const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, uint32_t corner,
+                               int reach, bool test_fit, Stencil& s) const;
   // Per sample, 1 / F(n.v) at R0: computed once per R0, read by every pair.
   std::vector<double> inverse_fresnel(double R0) const;
   // The residual's data and diffuse parts of pair p at the R0 of `inverse_F`, and its
