@@ -193,15 +193,16 @@ CrossViewSystem::CrossViewSystem(const LightingData& data, const SampleSet& samp
 bool CrossViewSystem::interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                                 const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample,
                                                 bool with_noise, Stencil& s) const {
-  // Around the corner nearest r: 5 x 5 pixels where the captures have noise and the
-  // other view sees r nearer its normal than the sample does (F smaller there, whatever
-  // R0 is: the header says why), and where that fails 3 x 3.
+  // Around the corner nearest r: where the captures have noise and the other view sees r
+  // nearer its normal than the sample does (F smaller there, whatever R0 is: the header
+  // says why), 5 x 5 pixels, and where that fails 3 x 3; where it sees r nearer grazing,
+  // 3 x 3 pixels that must pass the test of fit, or the pair is left out.
   const int nearest = int(std::max_element(s.weight.begin(), s.weight.begin() + 3) - s.weight.begin());
   const uint32_t corner = s.member[nearest];
-  if (with_noise && data_.mu[corner] > data_.mu[sample] &&
-      quadratic_weights(mesh, samples, steps, sample, corner, 2, with_noise, s) == StencilFit::fitted)
+  const bool finer = data_.mu[corner] > data_.mu[sample];
+  if (with_noise && finer && quadratic_weights(mesh, samples, steps, sample, corner, 2, true, s) == StencilFit::fitted)
     return true;
-  return quadratic_weights(mesh, samples, steps, sample, corner, 1, with_noise, s) != StencilFit::unresolved;
+  return quadratic_weights(mesh, samples, steps, sample, corner, 1, with_noise && !finer, s) != StencilFit::unresolved;
 }
 
 CrossViewSystem::StencilFit CrossViewSystem::quadratic_weights(const ReflectedMesh& mesh, const SampleSet& samples,

@@ -44,14 +44,20 @@
 // "5 x 5 stencils where the other view sees the direction nearer its normal").
 //
 // Where the lighting has detail finer than the sample spacing (a window's edge, a small
-// lamp) no interpolation is right and the equation does not hold. On captures with noise
-// a pair is left out where the quadratic misfits even the 3 x 3 pixels by more than their
-// noise (the same test): a robust loss would only down-weight it, and with the loss's
-// scale set by the noise, a misfit of a few noise levels still pulls, with the sign that
-// F's change with n.v gives it, so that R0 comes out high wherever a view sees a lamp
-// near its normal. The pairs whose misfit stays within the noise are outliers, which a
-// robust reweighting (Cauchy's) down-weights; on noise-free captures with a band-limited
-// diffuse term, where they are the only misfit, a trimming then drops them
+// lamp) no interpolation is right and the equation does not hold. Where the other view
+// sees r nearer grazing than sample a does, its pixels span more of the directions than
+// sample a's footprint, and no quadratic through them recovers the detail that sample a
+// records: on captures with noise such a pair is left out where the quadratic misfits
+// the 3 x 3 pixels by more than their noise (the same test). A robust loss would only
+// down-weight it, and with the loss's scale set by the noise a misfit of a few noise
+// levels still pulls, with the sign that F's change with n.v gives it, so that R0 comes
+// out high wherever the views see a lamp near their normals. Where the other view sees
+// r nearer its normal, its pixels are the finer ones and sample a records their mean,
+// which the quadratic's value at sample a's footprint follows even across a lamp's edge:
+// those pairs are kept (leaving them out too took R0 from +0.003 to +0.005-0.008 under
+// small lamps, docs/notes/photo-shoots.md). The misfits that remain are outliers, which
+// a robust reweighting (Cauchy's) down-weights; on noise-free captures with a
+// band-limited diffuse term, where they are the only misfit, a trimming then drops them
 // (cross_view.cpp, kTrim).
 #pragma once
 
@@ -139,10 +145,11 @@ class CrossViewSystem {
   // pixels around the corner nearest r (`with_noise`: where the other view sees r nearer
   // its normal than `sample` does and the quadratic fits them: see above), else or where
   // that fails on the 3 x 3; leaves it as it is where too few pixels exist or their
-  // quadratic is ill-conditioned. False where the pair is left out: `with_noise`, and the
-  // 3 x 3 pixels' quadratic misfits them by more than their noise (the lighting has
-  // detail there that no interpolation between the pixels recovers). `steps`: per
-  // sample, the change of its reflected direction per pixel along the film's x and y.
+  // quadratic is ill-conditioned. False where the pair is left out: `with_noise`, the
+  // other view sees r nearer grazing, and the 3 x 3 pixels' quadratic misfits them by
+  // more than their noise (the lighting has detail there that the other view's pixels do
+  // not resolve). `steps`: per sample, the change of its reflected direction per pixel
+  // along the film's x and y.
   bool interpolate_quadratically(const ReflectedMesh& mesh, const SampleSet& samples,
                                  const std::vector<std::array<Vec3, 2>>& steps, uint32_t sample, bool with_noise,
                                  Stencil& s) const;
