@@ -187,31 +187,31 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
 
 // The bounds below hold each case to the where it meets it with a margin, and
 // otherwise to what it measures with a margin (the simulation is deterministic, but
-// another CPU rounds differently). The joint fit's Rd misses its bound on all four of
-// these 8-bit shoots, and the reflectance estimate its 3% in the office: the recovered
-// camera response and the full-band diffuse term set them (docs/notes/photo-shoots.md,
-// "What limits them").
-// Measured in the office: the probe 3.2%, Rd under it 0.0048, the reflectance 3.7% and
-// the joint fit R0 +0.0004, Rd 0.024.
+// another CPU rounds differently). The joint fit's Rd misses its bound on three of these
+// 8-bit shoots and meets it too narrowly on the fourth to assert it: the camera response
+// recovered from 8-bit brackets leaves the merged radiance a few tenths of a percent off
+// linear, which a sphere whose mirror is a few percent of its light reads as diffuse
+// (docs/notes/photo-shoots.md, "What limits them").
+// Measured in the office: the probe 3.2%, Rd under it 0.0023, the reflectance 1.6% and
+// the joint fit R0 +0.0004, Rd 0.029 (the red channel, 0.98: with the true response
+// 0.011, and 0.0097 from ideal captures of the same views).
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {
-  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.045, 0.002, 0.03});
+  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.03, 0.002, 0.035});
 }
-// Measured: the probe 3.4%, the reflectance 3.1%, the joint fit R0 +0.0010 and Rd 0.011.
-// Pairs that no interpolation serves (cross_view.h) took R0 to +0.0017, the reflectance
-// to 4.7% and Rd to 0.016 here, which these bounds fail.
+// Measured: the probe 3.4%, the reflectance 1.0%, the joint fit R0 -0.0002 and Rd 0.0068.
 TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
-  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.04, 0.002, 0.015});
+  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.009});
 }
-// Under lebombo: measured, the probe 3.2%, the reflectance 1.6%, the joint R0 +0.0009
-// and Rd 0.013.
+// Under lebombo: measured, the probe 3.2%, the reflectance 1.8%, the joint R0 +0.0010
+// and Rd 0.0058.
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.02});
+  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.008});
 }
-// Measured: the probe 2.9%, the reflectance 1.7%, the joint R0 -0.0002 and Rd 0.011.
+// Measured: the probe 2.8%, the reflectance 1.4%, the joint R0 -0.0006 and Rd 0.0082.
 TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.02});
+  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.011});
 }
 
 // From noise-free 16-bit linear photos (the sphere given, the reflectance not) the
@@ -220,7 +220,7 @@ TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
 // bands (the simulator renders them full band, as a photograph has them). The joint Rd
 // is at twice the bound, set by the registration: the cameras placed from the
 // board photos are 0.02-0.06 mm off, and the same captures with the true cameras give
-// Rd within 0.0032. Measured: R0 +0.0001, Rd 0.0072, the reflectance within 0.7%.
+// Rd within 0.0032. Measured: R0 +0.0001, Rd 0.0070, the reflectance within 0.7%.
 TEST(PhotoShootAcceptance, NoiseFreePhotosMeetTheReflectanceBound) {
   TemporaryDirectory dir;
   ShootSimulation options = simulated_shoot(dir, "red_sphere_office.gltf", std::nullopt, false);

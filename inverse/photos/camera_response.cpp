@@ -130,17 +130,110 @@ std::vector<double> debevec(std::span<const ResponseSamples> brackets, const Cod
 // leaving them out would cut the noise's tail next to the limits and bias the mean there.
 // f is piecewise linear in ln exposure, kKnotsPerUnit knots per unit (steps of 10%), with
 // a smoothness on its second differences that carries it across the bracket's gaps.
-// What the refinement cannot fix is the ripple with the bracket's period that the data
-// leave free (sample_bracket): further refinements let it drift rather than settle
-// (docs/notes/hdr-merge.md has the measurements).
+//
+// With the samples' exposures held where Debevec and Malik's curve put them, f would keep
+// that curve's ripple with the bracket's period, which the data leave free
+// (sample_bracket): shifting every exposure of a sample by the ripple's value there
+// explains its codes as well. So f and the samples' exposures are then solved for
+// together (solve_forward_jointly), where the smoothness, not the first curve, settles
+// the ripple (docs/notes/hdr-merge.md has the measurements).
 constexpr double kKnotsPerUnit = 10.0;
 constexpr double kForwardSmoothness = 1.0;  // in units of a knot's mean data weight
+// Gauss-Newton steps of the joint solve: it settles in two (the codes are linear in f and
+// nearly so in the exposures).
+constexpr int kJointSteps = 3;
+
+// The forward curve on its knots (start, step), linear between them.
+struct ForwardKnots {
+  double start, step;
+  int count;
+  // The knot at or below x and the weights of it and the next; false outside the knots.
+  bool locate(double x, int& k, Eigen::Vector2d& basis) const {
+    const double u = (x - start) / step;
+    if (!(u >= 0.0 && u < count - 1)) return false;
+    k = int(u);
+    basis = Eigen::Vector2d(1.0 - (u - k), u - k);
+    return true;
+  }
+};
+
+// Minimises sum_ij (f(x_i + ln t_j) - z_ij)^2 + smoothness sum_k (f'' at knot k)^2 over f
+// and every sample's ln exposure x_i by Gauss-Newton, from f and the pairs' x_i + ln t_j
+// as given (pairs [sample_start[i], sample_start[i + 1]) are sample i's), holding f(0) at
+// the middle code. As in debevec(), each x_i enters only its own sample's terms and is
+// eliminated in closed form: each step solves a system in the knots alone.
+void solve_forward_jointly(std::vector<std::pair<double, int>>& pairs, const std::vector<size_t>& sample_start,
+                           const ForwardKnots& knots, double smoothness, Eigen::VectorXd& f) {
+  const int n = knots.count;
+  for (int step = 0; step < kJointSteps; ++step) {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(n);
+    const Eigen::Vector3d second(1.0, -2.0, 1.0);
+    for (int k = 1; k + 1 < n; ++k) {
+      a.block<3, 3>(k - 1, k - 1) += smoothness * second * second.transpose();
+      gradient.segment<3>(k - 1) += smoothness * second * second.dot(f.segment<3>(k - 1));
+    }
+    // f(0) = kMiddle (g(kMiddle) = 0): without it, moving every exposure and f together
+    // along the exposure axis changes nothing.
+    int k0;
+    Eigen::Vector2d at0;
+    if (!knots.locate(0.0, k0, at0)) return;
+    const double anchor = 1e3 * double(pairs.size());
+    a.block<2, 2>(k0, k0) += anchor * at0 * at0.transpose();
+    gradient.segment<2>(k0) += anchor * at0 * (at0.dot(f.segment<2>(k0)) - kMiddle);
+    // Per sample, its block of the Gauss-Newton system: sum (dr/dx_i)^2, sum dr/dx_i r,
+    // and per knot k that its residuals touch, sum dr/dx_i dr/df_k.
+    struct Exposure {
+      double xx = 0.0, gradient = 0.0;
+      std::vector<std::pair<int, double>> coupling;
+    };
+    std::vector<Exposure> exposures(sample_start.size() - 1);
+    for (size_t i = 0; i < exposures.size(); ++i) {
+      Exposure& e = exposures[i];
+      for (size_t p = sample_start[i]; p < sample_start[i + 1]; ++p) {
+        int k;
+        Eigen::Vector2d basis;
+        if (!knots.locate(pairs[p].first, k, basis)) continue;
+        const double residual = basis.dot(f.segment<2>(k)) - pairs[p].second;
+        const double slope = (f(k + 1) - f(k)) / knots.step;  // d residual / d x_i
+        a.block<2, 2>(k, k) += basis * basis.transpose();
+        gradient.segment<2>(k) += basis * residual;
+        e.xx += slope * slope, e.gradient += slope * residual;
+        for (int m = 0; m < 2; ++m) {
+          auto same =
+              std::find_if(e.coupling.begin(), e.coupling.end(), [&](const auto& c) { return c.first == k + m; });
+          if (same == e.coupling.end())
+            e.coupling.emplace_back(k + m, slope * basis(m));
+          else
+            same->second += slope * basis(m);
+        }
+      }
+      if (!(e.xx > 1e-12)) continue;  // its codes do not move with its exposure: clipped
+      for (const auto& [k1, c1] : e.coupling) {
+        gradient(k1) -= c1 * e.gradient / e.xx;
+        for (const auto& [k2, c2] : e.coupling) a(k1, k2) -= c1 * c2 / e.xx;
+      }
+    }
+    const Eigen::VectorXd df = -a.ldlt().solve(gradient);
+    if (!df.allFinite()) return;
+    f += df;
+    for (size_t i = 0; i < exposures.size(); ++i) {
+      const Exposure& e = exposures[i];
+      if (!(e.xx > 1e-12)) continue;
+      double dx = -e.gradient;
+      for (const auto& [k, c] : e.coupling) dx -= c * df(k);
+      dx /= e.xx;
+      for (size_t p = sample_start[i]; p < sample_start[i + 1]; ++p) pairs[p].first += dx;
+    }
+  }
+}
 
 void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits& limits,
                     const std::vector<float>& weight, int c, const std::array<int, 2>& well_constrained,
                     std::vector<double>& g) {
   // Each sample's ln exposure through g, and the (its ln exposure + ln t, code) pairs.
   std::vector<std::pair<double, int>> pairs;
+  std::vector<size_t> sample_start;  // sample i's pairs from sample_start[i]
   double lowest = INFINITY, highest = -INFINITY;
   for (const ResponseSamples& bracket : brackets) {
     const size_t exposures = bracket.exposures.size();
@@ -157,6 +250,7 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
       }
       if (used < 2) continue;  // one code alone is as noisy as the codes regressed on it
       const double log_exposure = std::log(sum / total);
+      sample_start.push_back(pairs.size());
       for (size_t j = 0; j < exposures; ++j) {
         const double x = log_exposure + std::log(bracket.exposures[j]);
         const int code = bracket.codes[(i * exposures + j) * 3 + c];
@@ -171,22 +265,25 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
   // beyond a camera's (over 100 units of ln exposure: 43 decades).
   constexpr double kMaxKnots = 1000.0;
   const double step = std::max(1.0 / kKnotsPerUnit, (highest - lowest) / kMaxKnots), start = lowest - step;
-  const int knots = int(std::ceil((highest - start) / step)) + 2;
+  const ForwardKnots grid{start, step, int(std::ceil((highest - start) / step)) + 2};
+  const int knots = grid.count;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(knots, knots);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(knots);
   size_t used = 0;
   for (const auto& [x, code] : pairs) {
-    const double u = (x - start) / step;
-    if (u < 0.0 || u >= knots - 1) continue;
-    const int k = int(u);
-    const Eigen::Vector2d basis(1.0 - (u - k), u - k);
+    int k;
+    Eigen::Vector2d basis;
+    if (!grid.locate(x, k, basis)) continue;
     a.block<2, 2>(k, k) += basis * basis.transpose();
     b.segment<2>(k) += basis * code;
     ++used;
   }
-  const Eigen::Vector3d row = std::sqrt(kForwardSmoothness * double(used) / knots) * Eigen::Vector3d(1.0, -2.0, 1.0);
-  for (int k = 1; k + 1 < knots; ++k) a.block<3, 3>(k - 1, k - 1) += row * row.transpose();
+  const double smoothness = kForwardSmoothness * double(used) / knots;
+  const Eigen::Vector3d second(1.0, -2.0, 1.0);
+  for (int k = 1; k + 1 < knots; ++k) a.block<3, 3>(k - 1, k - 1) += smoothness * second * second.transpose();
   Eigen::VectorXd f = a.ldlt().solve(b);
+  sample_start.push_back(pairs.size());
+  solve_forward_jointly(pairs, sample_start, grid, smoothness, f);
   for (int k = 1; k < knots; ++k) f(k) = std::max(f(k), f(k - 1));
   // g = f^-1 over the well-constrained codes; the codes beyond keep the curve's shape,
   // moved to meet the refined ends.
