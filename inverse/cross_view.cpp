@@ -263,8 +263,9 @@ CrossViewSystem::StencilFit CrossViewSystem::quadratic_weights(const ReflectedMe
   // kGoodness standard deviations above its mean). Where the lighting has detail the
   // pixels do not resolve, the quadratic smooths it by an amount that changes with n.v
   // as F does (a grazing view's pixels span more of it) and biases R0: a 5 x 5 stencil
-  // then gives way to the 3 x 3, which follows the detail closer, and a 3 x 3 that fails
-  // too leaves the pair out.
+  // then gives way to the 3 x 3, which follows the detail closer, and where the other
+  // view's pixels are the coarser ones a 3 x 3 that fails leaves the pair out
+  // (interpolate_quadratically).
   if (test_fit) {
     Eigen::Matrix<double, Eigen::Dynamic, 3> records(n, 3);
     for (int m = 0; m < n; ++m) records.row(m) = data_.observed[members[m]].cast<double>().matrix().transpose();
