@@ -25,12 +25,13 @@ using testing::TemporaryDirectory;
 constexpr int kExposures = 7;
 double exposure_time(int j) { return std::pow(4.0, j - 6); }
 
-BracketPhotos synthetic_bracket(const SyntheticScene& scene, bool noise = true) {
+BracketPhotos synthetic_bracket(const SyntheticScene& scene, bool noise = true,
+                                const testing::ToneCurve& curve = testing::kFilmCurve) {
   BracketPhotos photos;
   photos.bracket.folder = "synthetic";
   for (int j = 0; j < kExposures; ++j) {
     photos.bracket.exposures.push_back({"exposure_" + std::to_string(j) + ".png", exposure_time(j)});
-    photos.photos.push_back(testing::photograph(scene, exposure_time(j), 7, noise));
+    photos.photos.push_back(testing::photograph(scene, exposure_time(j), 7, noise, curve));
   }
   return photos;
 }
@@ -42,17 +43,24 @@ double median(std::vector<double> values) {
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// The largest relative error of the recovered f^-1 over each channel's well-constrained
-// codes, both curves relative to their value at the middle code 128.
-double response_error(const CameraResponse& response) {
-  double worst = 0.0;
-  const double middle = testing::film_curve_inverse(128 / 255.0);
+// The relative error of the recovered f^-1 over each channel's well-constrained codes,
+// both curves relative to their value at the middle code 128: the largest and the RMS.
+struct CurveError {
+  double largest = 0.0, rms = 0.0;
+};
+CurveError response_error(const CameraResponse& response, const testing::ToneCurve& curve = testing::kFilmCurve) {
+  CurveError error;
+  double sum = 0.0;
+  int codes = 0;
+  const double middle = curve.inverse(128 / 255.0);
   for (int c = 0; c < 3; ++c)
     for (int z = response.well_constrained[c][0]; z <= response.well_constrained[c][1]; ++z) {
-      const double truth = testing::film_curve_inverse(z / 255.0) / middle;
-      worst = std::max(worst, std::abs(std::exp(response.log_exposure[c][z]) / truth - 1.0));
+      const double relative = std::exp(response.log_exposure[c][z]) / (curve.inverse(z / 255.0) / middle) - 1.0;
+      error.largest = std::max(error.largest, std::abs(relative));
+      sum += relative * relative, ++codes;
     }
-  return worst;
+  error.rms = std::sqrt(sum / codes);
+  return error;
 }
 
 // Median relative error of the merge against the truth, over the pixels some exposure
@@ -80,7 +88,7 @@ TEST(HdrMerge, RecoversAFilmResponseAndMergesWithinOnePercent) {
     EXPECT_GE(response.well_constrained[c][1], 190) << c;
   }
   EXPECT_GE(response.well_constrained[0][1], 235);
-  const double curve = response_error(response);
+  const double curve = response_error(response).largest;
   EXPECT_LT(curve, 0.02);
 
   CapturedWarnings warnings;
@@ -109,6 +117,23 @@ TEST(HdrMerge, RecoversAFilmResponseAndMergesWithinOnePercent) {
   EXPECT_TRUE(contains(warnings.messages[0], "shorter")) << warnings.messages[0];
 }
 
+// A bracket in constant steps leaves the curve free up to a ripple with the bracket's
+// period, which only a prior settles (camera_response.cpp, settle_ripple): it must pick
+// the true curve for the common tone curves, not only for the film curve of the other
+// tests. Measured: film 0.68% (0.16% RMS), sRGB 0.81% (0.33%), gamma 2.2 0.94% (0.21%);
+// with the ripple settled by second differences sRGB and the gamma were 3% off.
+TEST(HdrMerge, RecoversCommonToneCurvesWithoutTheBracketsRipple) {
+  const SyntheticScene scene = testing::synthetic_scene(256, 192);
+  for (const auto& [name, curve] : {std::pair("film", testing::kFilmCurve), std::pair("sRGB", testing::kSrgbCurve),
+                                    std::pair("gamma 2.2", testing::kGamma22Curve)}) {
+    const ResponseSamples samples = sample_bracket(synthetic_bracket(scene, true, curve));
+    const CurveError error = response_error(recover_response({&samples, 1}), curve);
+    std::printf("%s: response within %.3f%% (%.3f%% RMS)\n", name, 100 * error.largest, 100 * error.rms);
+    EXPECT_LT(error.largest, 0.015) << name;
+    EXPECT_LT(error.rms, 0.005) << name;
+  }
+}
+
 TEST(HdrMerge, RecoversTheResponseJointlyFromBracketsOfDifferentExposures) {
   // Two views, the second shot one stop longer throughout: one response fits both.
   const SyntheticScene scene = testing::synthetic_scene(128, 96);
@@ -121,7 +146,7 @@ TEST(HdrMerge, RecoversTheResponseJointlyFromBracketsOfDifferentExposures) {
   const std::vector<ResponseSamples> samples = {sample_bracket(first), sample_bracket(second)};
   const CameraResponse response = recover_response(samples);
   EXPECT_EQ(response.samples, 2 * 128u * 96u);  // a sample a pixel: fewer than 4096 pixels each
-  EXPECT_LT(response_error(response), 0.02);
+  EXPECT_LT(response_error(response).largest, 0.02);
   EXPECT_LT(merge_error(merge_bracket(second, response), scene), 0.01);
 }
 

@@ -10,6 +10,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
@@ -17,9 +18,24 @@
 
 namespace glaze::testing {
 
-// The tone curve is the shoot simulator's film_curve (not a power law).
+// The tone curve is the shoot simulator's film_curve (not a power law) unless a test
+// names another: a curve from signal (1 at full well) to code / 255, and its inverse.
 using glaze::film_curve;
 using glaze::film_curve_inverse;
+struct ToneCurve {
+  double (*forward)(double);
+  double (*inverse)(double);
+};
+inline constexpr ToneCurve kFilmCurve{film_curve, film_curve_inverse};
+// sRGB's encoding (IEC 61966-2-1), a linear toe and a 1/2.4 power, and a pure 1/2.2 power.
+inline double srgb_encode(double linear) {
+  linear = std::clamp(linear, 0.0, 1.0);
+  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+inline double srgb_decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+inline constexpr ToneCurve kSrgbCurve{srgb_encode, srgb_decode};
+inline constexpr ToneCurve kGamma22Curve{[](double x) { return std::pow(std::clamp(x, 0.0, 1.0), 1.0 / 2.2); },
+                                         [](double v) { return std::pow(v, 2.2); }};
 
 // The scene: a gradient over five decades along x (0.02 to 2000), a texture, a colour,
 // and a hot spot (radius height/8, 50000) that saturates every exposure.
@@ -44,10 +60,11 @@ inline SyntheticScene synthetic_scene(int width, int height) {
   return scene;
 }
 
-// The scene photographed for `seconds` through film_curve: 60000 electrons at E = 1 (a
-// full-frame sensor at base ISO),
-// Poisson shot noise (as a Gaussian) and 5 electrons of read noise, unless `noise` is off.
-inline PhotoCodes photograph(const SyntheticScene& scene, double seconds, uint64_t seed, bool noise = true) {
+// The scene photographed for `seconds` through `curve`: 60000 electrons at E = 1 (a
+// full-frame sensor at base ISO), Poisson shot noise (as a Gaussian) and 5 electrons of
+// read noise, unless `noise` is off.
+inline PhotoCodes photograph(const SyntheticScene& scene, double seconds, uint64_t seed, bool noise = true,
+                             const ToneCurve& curve = kFilmCurve) {
   constexpr double kFullWell = 60000.0, kReadNoise = 5.0;
   PhotoCodes photo{scene.width, scene.height, 8, false, std::vector<uint16_t>(scene.radiance.size())};
   Pcg32 rng(seed, uint64_t(seconds * 1e6));
@@ -58,7 +75,7 @@ inline PhotoCodes photograph(const SyntheticScene& scene, double seconds, uint64
   for (size_t i = 0; i < scene.radiance.size(); ++i) {
     double electrons = scene.radiance[i] * seconds * kFullWell;
     if (noise) electrons += std::sqrt(electrons) * gaussian() + kReadNoise * gaussian();
-    photo.codes[i] = uint16_t(std::lround(255.0 * film_curve(electrons / kFullWell)));
+    photo.codes[i] = uint16_t(std::lround(255.0 * curve.forward(electrons / kFullWell)));
   }
   return photo;
 }

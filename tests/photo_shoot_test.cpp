@@ -187,28 +187,27 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
 
 // The bounds below hold each case to the where it meets it with a margin, and
 // otherwise to what it measures with a margin (the simulation is deterministic, but
-// another CPU rounds differently). The joint fit's Rd misses its bound on three of these
-// 8-bit shoots and meets it too narrowly on the fourth to assert it: the camera response
-// recovered from 8-bit brackets leaves the merged radiance a few tenths of a percent off
-// linear, which a sphere whose mirror is a few percent of its light reads as diffuse
+// another CPU rounds differently). The joint fit's Rd meets its bound on the office's
+// two shoots (on the white sphere's too narrowly to assert it) and misses it under
+// lebombo, where the same photos merged through the true response miss it as well
+// (0.0097 and 0.0085): what is left there is the registration's and the noise's
 // (docs/notes/photo-shoots.md, "What limits them").
-// Measured in the office: the probe 3.2%, Rd under it 0.0023, the reflectance 1.6% and
-// the joint fit R0 +0.0004, Rd 0.029 (the red channel, 0.98: with the true response
-// 0.011, and 0.0097 from ideal captures of the same views).
+// Measured in the office: the probe 3.2%, Rd under it 0.0027, the reflectance 2.0% and
+// the joint fit R0 +0.0003, Rd 0.0026.
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {
-  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.03, 0.002, 0.035});
+  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.03, 0.002, 0.006});
 }
-// Measured: the probe 3.4%, the reflectance 1.0%, the joint fit R0 -0.0002 and Rd 0.0068.
+// Measured: the probe 3.4%, the reflectance 1.6%, the joint fit R0 +0.0003 and Rd 0.0056.
 TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
-  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.009});
+  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.007});
 }
-// Under lebombo: measured, the probe 3.2%, the reflectance 1.8%, the joint R0 +0.0010
-// and Rd 0.0058.
+// Under lebombo: measured, the probe 3.2%, the reflectance 1.5%, the joint R0 +0.0009
+// and Rd 0.0093.
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.008});
+  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.011});
 }
-// Measured: the probe 2.8%, the reflectance 1.4%, the joint R0 -0.0006 and Rd 0.0082.
+// Measured: the probe 2.8%, the reflectance 1.5%, the joint R0 -0.0004 and Rd 0.0095.
 TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
   expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.011});

@@ -97,14 +97,12 @@ std::vector<double> debevec(std::span<const ResponseSamples> brackets, const Cod
   // it still carries the curve through the codes no sample constrains. The penalty is
   // g'' + g' / z rather than g'': the second derivative of g in ln z, zero wherever f^-1
   // is locally a power law z^gamma, as a tone curve's toe is (sRGB's linear segment, a
-  // gamma), so that a strong penalty does not bend the toe. Strong, because it alone
-  // settles what a bracket in constant steps leaves free (sample_bracket): the ripple
-  // with the bracket's period. Too strong, it flattens the shoulder and the toe, which
-  // refine_forward then mends from the data (it cannot mend the ripple, which it keeps
-  // from this curve). With the refinement, 10000 takes three simulated shoots' curves to
-  // within 1.0% (0.45-0.54% RMS in red) against 1.3-1.7% at 3000 and 2.3-3.3% at 3000
-  // without it, and the synthetic brackets of tests/hdr_merge_test.cpp to within 0.67%
-  // (docs/notes/hdr-merge.md).
+  // gamma), so that a strong penalty does not bend the toe. Strong, because the curve it
+  // gives is what refine_forward regresses on, and a weak one leaves a large ripple with
+  // the bracket's period (sample_bracket). Too strong, it flattens the shoulder and the
+  // toe, which refine_forward then mends from the data; refine_forward then settles the
+  // ripple (docs/notes/hdr-merge.md). 10000 took three simulated shoots' curves to within
+  // 1.0% before the ripple was settled, against 1.3-1.7% at 3000.
   constexpr double kLambda = 10000.0;
   const double lambda = kLambda * data_weight / kCodes;
   for (int z = 1; z + 1 < kCodes; ++z) {
@@ -116,6 +114,25 @@ std::vector<double> debevec(std::span<const ResponseSamples> brackets, const Cod
   a(kMiddle, kMiddle) += std::max(lambda, 1.0);  // g(kMiddle) = 0
   const Eigen::VectorXd g = a.ldlt().solve(b);
   return std::vector<double>(g.data(), g.data() + kCodes);
+}
+
+// The differences of the given order along a uniform grid, (D y)_k = sum_m stencil_m
+// y_(k + m): binomial weights of alternating sign (1 -2 1 for the second).
+Eigen::VectorXd difference_stencil(int order) {
+  Eigen::VectorXd stencil(order + 1);
+  double binomial = 1.0;
+  for (int m = 0; m <= order; ++m) {
+    stencil(m) = ((order - m) % 2 ? -1.0 : 1.0) * binomial;
+    binomial = binomial * (order - m) / (m + 1);
+  }
+  return stencil;
+}
+
+// Adds weight * |D y|^2, D the differences of `order` along y, to the normal matrix a.
+void add_difference_penalty(int order, double weight, Eigen::MatrixXd& a) {
+  const Eigen::VectorXd stencil = difference_stencil(order);
+  for (Eigen::Index k = 0; k + order < a.rows(); ++k)
+    a.block(k, k, order + 1, order + 1) += weight * stencil * stencil.transpose();
 }
 
 // Debevec and Malik's least squares are in g, whose argument, the code, carries the
@@ -131,17 +148,19 @@ std::vector<double> debevec(std::span<const ResponseSamples> brackets, const Cod
 // f is piecewise linear in ln exposure, kKnotsPerUnit knots per unit (steps of 10%), with
 // a smoothness on its second differences that carries it across the bracket's gaps.
 //
-// With the samples' exposures held where Debevec and Malik's curve put them, f would keep
+// With the samples' exposures held where Debevec and Malik's curve put them, f keeps
 // that curve's ripple with the bracket's period, which the data leave free
 // (sample_bracket): shifting every exposure of a sample by the ripple's value there
-// explains its codes as well. So f and the samples' exposures are then solved for
-// together (solve_forward_jointly), where the smoothness, not the first curve, settles
-// the ripple (docs/notes/hdr-merge.md has the measurements).
+// explains its codes as well. settle_ripple then picks, among the curves that the ripple
+// relates, the one the data cannot: the smoothest by a measure under which common tone
+// curves are their own smoothest (docs/notes/hdr-merge.md has the measurements).
 constexpr double kKnotsPerUnit = 10.0;
 constexpr double kForwardSmoothness = 1.0;  // in units of a knot's mean data weight
-// Gauss-Newton steps of the joint solve: it settles in two (the codes are linear in f and
-// nearly so in the exposures).
-constexpr int kJointSteps = 3;
+// The ripple is settled over the codes of at least this hat weight (refine_forward): 17
+// to 238. Over all the well-constrained codes a gamma of 2.2 came out within 1.6% in the
+// tests, against 0.9% at 0.1; at 0.25 the white and the red sphere's shoots in the office
+// recovered a joint Rd 0.004-0.017 worse (docs/notes/hdr-merge.md).
+constexpr float kRippleWeight = 0.1f;
 
 // The forward curve on its knots (start, step), linear between them.
 struct ForwardKnots {
@@ -157,83 +176,94 @@ struct ForwardKnots {
   }
 };
 
-// Minimises sum_ij (f(x_i + ln t_j) - z_ij)^2 + smoothness sum_k (f'' at knot k)^2 over f
-// and every sample's ln exposure x_i by Gauss-Newton, from f and the pairs' x_i + ln t_j
-// as given (pairs [sample_start[i], sample_start[i + 1]) are sample i's), holding f(0) at
-// the middle code. As in debevec(), each x_i enters only its own sample's terms and is
-// eliminated in closed form: each step solves a system in the knots alone.
-void solve_forward_jointly(std::vector<std::pair<double, int>>& pairs, const std::vector<size_t>& sample_start,
-                           const ForwardKnots& knots, double smoothness, Eigen::VectorXd& f) {
-  const int n = knots.count;
-  for (int step = 0; step < kJointSteps; ++step) {
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(n);
-    const Eigen::Vector3d second(1.0, -2.0, 1.0);
-    for (int k = 1; k + 1 < n; ++k) {
-      a.block<3, 3>(k - 1, k - 1) += smoothness * second * second.transpose();
-      gradient.segment<3>(k - 1) += smoothness * second * second.dot(f.segment<3>(k - 1));
+// The period, in ln exposure, of the ripple that the brackets leave free: when every
+// bracket's exposures are whole multiples of one step apart (a bracket 2 EV apart: ln 4),
+// shifting every exposure by a function of ln exposure with that period explains all
+// codes as well (sample_bracket). 0 when the exposures share no such step, or one so
+// short (under 0.4 EV) that the smoothness of the curve settles the ripple by itself.
+double free_ripple_period(std::span<const ResponseSamples> brackets) {
+  std::vector<double> gaps;
+  for (const ResponseSamples& bracket : brackets)
+    for (size_t j = 1; j < bracket.exposures.size(); ++j) {
+      const double gap = std::abs(std::log(bracket.exposures[j] / bracket.exposures[0]));
+      if (gap > 1e-6) gaps.push_back(gap);
     }
-    // f(0) = kMiddle (g(kMiddle) = 0): without it, moving every exposure and f together
-    // along the exposure axis changes nothing.
-    int k0;
-    Eigen::Vector2d at0;
-    if (!knots.locate(0.0, k0, at0)) return;
-    const double anchor = 1e3 * double(pairs.size());
-    a.block<2, 2>(k0, k0) += anchor * at0 * at0.transpose();
-    gradient.segment<2>(k0) += anchor * at0 * (at0.dot(f.segment<2>(k0)) - kMiddle);
-    // Per sample, its block of the Gauss-Newton system: sum (dr/dx_i)^2, sum dr/dx_i r,
-    // and per knot k that its residuals touch, sum dr/dx_i dr/df_k.
-    struct Exposure {
-      double xx = 0.0, gradient = 0.0;
-      std::vector<std::pair<int, double>> coupling;
-    };
-    std::vector<Exposure> exposures(sample_start.size() - 1);
-    for (size_t i = 0; i < exposures.size(); ++i) {
-      Exposure& e = exposures[i];
-      for (size_t p = sample_start[i]; p < sample_start[i + 1]; ++p) {
-        int k;
-        Eigen::Vector2d basis;
-        if (!knots.locate(pairs[p].first, k, basis)) continue;
-        const double residual = basis.dot(f.segment<2>(k)) - pairs[p].second;
-        const double slope = (f(k + 1) - f(k)) / knots.step;  // d residual / d x_i
-        a.block<2, 2>(k, k) += basis * basis.transpose();
-        gradient.segment<2>(k) += basis * residual;
-        e.xx += slope * slope, e.gradient += slope * residual;
-        for (int m = 0; m < 2; ++m) {
-          auto same =
-              std::find_if(e.coupling.begin(), e.coupling.end(), [&](const auto& c) { return c.first == k + m; });
-          if (same == e.coupling.end())
-            e.coupling.emplace_back(k + m, slope * basis(m));
-          else
-            same->second += slope * basis(m);
-        }
+  if (gaps.empty()) return 0.0;
+  const double shortest = *std::min_element(gaps.begin(), gaps.end());
+  constexpr double kShortestPeriod = 0.4 * M_LN2, kTolerance = 0.01;
+  for (int divisor = 1; shortest / divisor >= kShortestPeriod; ++divisor) {
+    const double step = shortest / divisor;
+    if (std::all_of(gaps.begin(), gaps.end(),
+                    [&](double gap) { return std::abs(gap / step - std::round(gap / step)) < kTolerance; }))
+      return step;
+  }
+  return 0.0;
+}
+
+// A shift of ln exposure with the period of the ripple the brackets leave free
+// (free_ripple_period): a few harmonics.
+struct Ripple {
+  double frequency = 0.0;        // radians per unit of ln exposure
+  Eigen::VectorXd coefficients;  // cos, sin of each harmonic
+  // Harmonic `column`'s value at u: cos, sin of the first harmonic, then the second's...
+  double harmonic(int column, double u) const {
+    const double phase = (column / 2 + 1) * frequency * u;
+    return column % 2 ? std::sin(phase) : std::cos(phase);
+  }
+  double shift(double u) const {
+    double value = 0.0;
+    for (Eigen::Index column = 0; column < coefficients.size(); ++column)
+      value += coefficients(column) * harmonic(int(column), u);
+    return value;
+  }
+};
+
+// The ripple that the data leave free, settled by the smoothness of the forward curve
+// alone. The data cannot tell the curves that the ripple relates apart; a prior must
+// pick one, and it must be one under which tone curves are their own smoothest. Least
+// second differences of f is not: the true f'' has a component with the bracket's
+// period, which the smoothest curve cancels (0.25% of exposure for the film curve of the
+// tests, about 1% for sRGB and a gamma of 2.2). Least third differences is: within 0.1%
+// of the truth for those three and for ACES's filmic curve (docs/notes/hdr-merge.md).
+// So this finds the periodic shift p of ln exposure that minimises |D3 f~|^2 over knots
+// [first, last], f~(u) = f(u - p(u)) ~ f(u) - f'(u) p(u): linear least squares in p's
+// coefficients. Moving each code's exposure by p then changes nothing the data see:
+// every sample's codes are explained as well, its exposure moved by p too. The knots,
+// not g's codes, are what is differenced: g is linear between codes, and its kinks
+// would swamp D3.
+Ripple settle_ripple(double period, const Eigen::VectorXd& f, const ForwardKnots& knots, int first, int last) {
+  constexpr int kOrder = 3;
+  Ripple ripple;
+  // As many harmonics as have three knots or more to the wavelength (4 for a bracket 2 EV
+  // apart, 6 for 3 EV), and a curve long enough to tell them apart.
+  const int harmonics = int(period / (3.0 * knots.step));
+  if (!(period > 0.0) || harmonics < 1 || last - first < 2 * harmonics + kOrder + 2) return ripple;
+  ripple.frequency = 2.0 * M_PI / period;
+  const Eigen::VectorXd stencil = difference_stencil(kOrder);
+  const int rows = last - first + 1 - kOrder;
+  Eigen::MatrixXd a(rows, 2 * harmonics);
+  Eigen::VectorXd b(rows);
+  for (int r = 0; r < rows; ++r) {
+    b(r) = -stencil.dot(f.segment(first + r, kOrder + 1));
+    for (int column = 0; column < 2 * harmonics; ++column) {
+      a(r, column) = 0.0;
+      for (int m = 0; m <= kOrder; ++m) {
+        const int k = first + r + m;
+        const double slope = (f(k + 1) - f(k - 1)) / (2.0 * knots.step);
+        a(r, column) -= stencil(m) * slope * ripple.harmonic(column, knots.start + k * knots.step);
       }
-      if (!(e.xx > 1e-12)) continue;  // its codes do not move with its exposure: clipped
-      for (const auto& [k1, c1] : e.coupling) {
-        gradient(k1) -= c1 * e.gradient / e.xx;
-        for (const auto& [k2, c2] : e.coupling) a(k1, k2) -= c1 * c2 / e.xx;
-      }
-    }
-    const Eigen::VectorXd df = -a.ldlt().solve(gradient);
-    if (!df.allFinite()) return;
-    f += df;
-    for (size_t i = 0; i < exposures.size(); ++i) {
-      const Exposure& e = exposures[i];
-      if (!(e.xx > 1e-12)) continue;
-      double dx = -e.gradient;
-      for (const auto& [k, c] : e.coupling) dx -= c * df(k);
-      dx /= e.xx;
-      for (size_t p = sample_start[i]; p < sample_start[i + 1]; ++p) pairs[p].first += dx;
     }
   }
+  const Eigen::VectorXd coefficients = a.colPivHouseholderQr().solve(b);
+  if (coefficients.allFinite()) ripple.coefficients = coefficients;
+  return ripple;
 }
 
 void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits& limits,
                     const std::vector<float>& weight, int c, const std::array<int, 2>& well_constrained,
-                    std::vector<double>& g) {
+                    double ripple_period, std::vector<double>& g) {
   // Each sample's ln exposure through g, and the (its ln exposure + ln t, code) pairs.
   std::vector<std::pair<double, int>> pairs;
-  std::vector<size_t> sample_start;  // sample i's pairs from sample_start[i]
   double lowest = INFINITY, highest = -INFINITY;
   for (const ResponseSamples& bracket : brackets) {
     const size_t exposures = bracket.exposures.size();
@@ -250,7 +280,6 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
       }
       if (used < 2) continue;  // one code alone is as noisy as the codes regressed on it
       const double log_exposure = std::log(sum / total);
-      sample_start.push_back(pairs.size());
       for (size_t j = 0; j < exposures; ++j) {
         const double x = log_exposure + std::log(bracket.exposures[j]);
         const int code = bracket.codes[(i * exposures + j) * 3 + c];
@@ -279,20 +308,28 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
     ++used;
   }
   const double smoothness = kForwardSmoothness * double(used) / knots;
-  const Eigen::Vector3d second(1.0, -2.0, 1.0);
-  for (int k = 1; k + 1 < knots; ++k) a.block<3, 3>(k - 1, k - 1) += smoothness * second * second.transpose();
+  add_difference_penalty(2, smoothness, a);
   Eigen::VectorXd f = a.ldlt().solve(b);
-  sample_start.push_back(pairs.size());
-  solve_forward_jointly(pairs, sample_start, grid, smoothness, f);
   for (int k = 1; k < knots; ++k) f(k) = std::max(f(k), f(k - 1));
-  // g = f^-1 over the well-constrained codes; the codes beyond keep the curve's shape,
-  // moved to meet the refined ends.
+  // The knots where the ripple is settled: inside the well-constrained codes, and off
+  // the limits, where a curve's clip (a gamma's kink at 255) bends the mean of the codes
+  // that f regresses and, through D3, the ripple (docs/notes/hdr-merge.md).
+  int first = 1, last = knots - 2;
+  int low = well_constrained[0], high = well_constrained[1];
+  while (low < high && weight[low] < kRippleWeight) ++low;
+  while (high > low && weight[high] < kRippleWeight) --high;
+  while (first < last && f(first) < low) ++first;
+  while (last > first && f(last) > high) --last;
+  const Ripple ripple = settle_ripple(ripple_period, f, grid, first, last);
+  // g = f^-1 over the well-constrained codes, each moved by the ripple; the codes beyond
+  // keep the curve's shape, moved to meet the refined ends.
   std::vector<double> refined = g;
   int k = 0;
   for (int z = well_constrained[0]; z <= well_constrained[1]; ++z) {
     while (k + 1 < knots && f(k + 1) < z) ++k;
     if (k + 1 >= knots || f(k) > z || !(f(k + 1) > f(k))) return;  // f does not reach z: keep g
-    refined[z] = start + step * (k + (z - f(k)) / (f(k + 1) - f(k)));
+    const double u = start + step * (k + (z - f(k)) / (f(k + 1) - f(k)));
+    refined[z] = u + ripple.shift(u);
   }
   for (int z = 0; z < well_constrained[0]; ++z) refined[z] += refined[well_constrained[0]] - g[well_constrained[0]];
   for (int z = well_constrained[1] + 1; z < kCodes; ++z)
@@ -354,9 +391,9 @@ ResponseSamples sample_bracket(const BracketPhotos& photos, int max_samples) {
   // Samples spread evenly over the scene's range of exposure, as Debevec and Malik ask.
   // With exposures in a constant ratio (a bracket 2 EV apart) the data leave the curve
   // free up to a component periodic in ln exposure with the bracket's step (Grossberg
-  // and Nayar 2003, the "fractal" ambiguity); the smoothness term alone settles that
-  // component, and samples massed at the few radiances of a backdrop let their noise
-  // set it instead (9% off on a simulated shoot; docs/notes/hdr-merge.md). Per channel,
+  // and Nayar 2003, the "fractal" ambiguity); a smoothness settles that component
+  // (settle_ripple), and samples massed at the few radiances of a backdrop let their
+  // noise set it instead (9% off on a simulated shoot; docs/notes/hdr-merge.md). Per channel,
   // a pixel's place on the exposure axis is the exposure that sees it nearest the middle
   // code and that code's band of 16; each place keeps at most `cap` pixels, chosen at
   // random (a fixed seed) so that they do not alias with a regular structure, and each
@@ -446,6 +483,7 @@ CameraResponse recover_response(std::span<const ResponseSamples> brackets) {
   const CodeLimits limits = code_limits(8);
   const std::vector<float> weight = hat_weights(limits);
   const auto count = observations(brackets, limits, weight);
+  const double ripple = free_ripple_period(brackets);
   for (const ResponseSamples& bracket : brackets)
     response.samples += bracket.codes.size() / 3 / bracket.exposures.size();
   for (int c = 0; c < 3; ++c) {
@@ -456,7 +494,7 @@ CameraResponse recover_response(std::span<const ResponseSamples> brackets) {
       if (count[c][z] >= kMinObservations && weight[z] >= kMinWeight) low = std::min(low, z), high = std::max(high, z);
     if (high < 0) throw Error(std::string("no sample constrains the camera response's ") + kChannels[c] + " channel");
     response.well_constrained[c] = {low, high};
-    refine_forward(brackets, limits, weight, c, response.well_constrained[c], response.log_exposure[c]);
+    refine_forward(brackets, limits, weight, c, response.well_constrained[c], ripple, response.log_exposure[c]);
   }
   return response;
 }

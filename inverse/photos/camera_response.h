@@ -6,9 +6,9 @@
 // known exposures: least squares over g(Z_ij) = ln E_i + ln t_j with a hat weight and a
 // smoothness term on g'', here over all brackets of a shoot at once (each with its own
 // exposure times: OpenCV's CalibrateDebevec takes one bracket), on sample pixels, then
-// refined by regressing the codes on the samples' exposures, solved for together with
-// the curve (Debevec and Malik's regression, of g on the noisy codes, is biased where g
-// is steep).
+// refined by regressing the codes on the samples' exposures (Debevec and Malik's
+// regression, of g on the noisy codes, is biased where g is steep), and with the ripple
+// that a bracket in constant steps leaves free settled by the curve's smoothness alone.
 // On the synthetic brackets of the tests it is several times as accurate as OpenCV's
 // CalibrateDebevec and CalibrateRobertson, and a plain Robertson et al. (2003) iteration
 // did not settle (docs/notes/hdr-merge.md). 16-bit and raw photos are linear: their
