@@ -156,8 +156,8 @@ void add_difference_penalty(int order, double weight, Eigen::MatrixXd& a) {
 // curves are their own smoothest (docs/notes/hdr-merge.md has the measurements).
 constexpr double kKnotsPerUnit = 10.0;
 constexpr double kForwardSmoothness = 1.0;  // in units of a knot's mean data weight
-// The ripple is settled over the codes of at least this hat weight (refine_forward): 17
-// to 238. Over all the well-constrained codes a gamma of 2.2 came out within 1.6% in the
+// The ripple is settled over the codes of at least this hat weight (refine_forward): 18
+// to 237. Over all the well-constrained codes a gamma of 2.2 came out within 1.6% in the
 // tests, against 0.9% at 0.1; at 0.25 the white and the red sphere's shoots in the office
 // recovered a joint Rd 0.004-0.017 worse (docs/notes/hdr-merge.md).
 constexpr float kRippleWeight = 0.1f;
@@ -179,8 +179,11 @@ struct ForwardKnots {
 // The period, in ln exposure, of the ripple that the brackets leave free: when every
 // bracket's exposures are whole multiples of one step apart (a bracket 2 EV apart: ln 4),
 // shifting every exposure by a function of ln exposure with that period explains all
-// codes as well (sample_bracket). 0 when the exposures share no such step, or one so
-// short (under 0.4 EV) that the smoothness of the curve settles the ripple by itself.
+// codes as well (sample_bracket). Whole multiples to within 0.1 EV: EXIF records the
+// nominal times (1/15 s for 2^-4), and the data's ambiguity is the true exposures'. The
+// step is then fitted to every gap. 0 when the exposures share no step of 0.4 EV or more
+// (settle_ripple also leaves alone one too short for its knots: under 0.43 EV at 10 a
+// unit).
 double free_ripple_period(std::span<const ResponseSamples> brackets) {
   std::vector<double> gaps;
   for (const ResponseSamples& bracket : brackets)
@@ -190,11 +193,17 @@ double free_ripple_period(std::span<const ResponseSamples> brackets) {
     }
   if (gaps.empty()) return 0.0;
   const double shortest = *std::min_element(gaps.begin(), gaps.end());
-  constexpr double kShortestPeriod = 0.4 * M_LN2, kTolerance = 0.01;
+  constexpr double kShortestPeriod = 0.4 * M_LN2, kTolerance = 0.1 * M_LN2;
   for (int divisor = 1; shortest / divisor >= kShortestPeriod; ++divisor) {
-    const double step = shortest / divisor;
+    // The step that fits every gap's multiple of it best, in least squares.
+    double sum_gap = 0.0, sum_multiple = 0.0;
+    for (double gap : gaps) {
+      const double multiple = std::round(gap / (shortest / divisor));
+      sum_gap += multiple * gap, sum_multiple += multiple * multiple;
+    }
+    const double step = sum_gap / sum_multiple;
     if (std::all_of(gaps.begin(), gaps.end(),
-                    [&](double gap) { return std::abs(gap / step - std::round(gap / step)) < kTolerance; }))
+                    [&](double gap) { return std::abs(gap - std::round(gap / step) * step) < kTolerance; }))
       return step;
   }
   return 0.0;
@@ -255,7 +264,13 @@ Ripple settle_ripple(double period, const Eigen::VectorXd& f, const ForwardKnots
     }
   }
   const Eigen::VectorXd coefficients = a.colPivHouseholderQr().solve(b);
-  if (coefficients.allFinite()) ripple.coefficients = coefficients;
+  if (!coefficients.allFinite()) return ripple;
+  // u + p(u) must keep increasing, or the curve would fold back: |p'| under 1/2 by far,
+  // as a ripple of a few tenths of a percent is (its slope is about 0.02).
+  double steepest = 0.0;
+  for (int h = 0; h < harmonics; ++h)
+    steepest += (h + 1) * ripple.frequency * std::hypot(coefficients(2 * h), coefficients(2 * h + 1));
+  if (steepest < 0.5) ripple.coefficients = coefficients;
   return ripple;
 }
 
