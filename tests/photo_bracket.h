@@ -6,6 +6,7 @@
 #include "inverse/photos/bracket.h"
 #include "inverse/photos/shoot_simulator.h"
 #include "renderer/error.h"
+#include "renderer/image.h"
 #include "renderer/rng.h"
 
 #include <OpenImageIO/imageio.h>
@@ -27,13 +28,9 @@ struct ToneCurve {
   double (*inverse)(double);
 };
 inline constexpr ToneCurve kFilmCurve{film_curve, film_curve_inverse};
-// sRGB's encoding (IEC 61966-2-1), a linear toe and a 1/2.4 power, and a pure 1/2.2 power.
-inline double srgb_encode(double linear) {
-  linear = std::clamp(linear, 0.0, 1.0);
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
-}
-inline double srgb_decode(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
-inline constexpr ToneCurve kSrgbCurve{srgb_encode, srgb_decode};
+// sRGB's encoding (a linear toe and a 1/2.4 power: the renderer's), and a pure 1/2.2 power.
+inline constexpr ToneCurve kSrgbCurve{[](double x) { return double(linear_to_srgb(float(std::clamp(x, 0.0, 1.0)))); },
+                                      [](double v) { return double(srgb_to_linear(float(v))); }};
 inline constexpr ToneCurve kGamma22Curve{[](double x) { return std::pow(std::clamp(x, 0.0, 1.0), 1.0 / 2.2); },
                                          [](double v) { return std::pow(v, 2.2); }};
 
