@@ -190,8 +190,8 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
 // another CPU rounds differently). The joint fit's Rd meets its bound on the office's
 // two shoots (on the white sphere's too narrowly to assert it) and misses it under
 // lebombo, where the same photos merged through the true response miss it as well
-// (0.0097 and 0.0085): what is left there is the registration's and the noise's
-// (docs/notes/photo-shoots.md, "What limits them").
+// (0.0097 and 0.0085): what is left there is mostly the sphere's place from its outline,
+// then the registration's (docs/notes/photo-shoots.md, "What limits them").
 // Measured in the office: the probe 3.2%, Rd under it 0.0027, the reflectance 2.0% and
 // the joint fit R0 +0.0003, Rd 0.0026.
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {

@@ -97,12 +97,11 @@ std::vector<double> debevec(std::span<const ResponseSamples> brackets, const Cod
   // it still carries the curve through the codes no sample constrains. The penalty is
   // g'' + g' / z rather than g'': the second derivative of g in ln z, zero wherever f^-1
   // is locally a power law z^gamma, as a tone curve's toe is (sRGB's linear segment, a
-  // gamma), so that a strong penalty does not bend the toe. Strong, because the curve it
-  // gives is what refine_forward regresses on, and a weak one leaves a large ripple with
-  // the bracket's period (sample_bracket). Too strong, it flattens the shoulder and the
-  // toe, which refine_forward then mends from the data; refine_forward then settles the
-  // ripple (docs/notes/hdr-merge.md). 10000 took three simulated shoots' curves to within
-  // 1.0% before the ripple was settled, against 1.3-1.7% at 3000.
+  // gamma), so that a strong penalty does not bend the toe. It was made strong (10000
+  // against 3000: three simulated shoots' curves within 1.0% against 1.3-1.7%) when it
+  // alone held down the ripple with the bracket's period (sample_bracket). Now that
+  // refine_forward mends the toe and the shoulder from the data and settles the ripple,
+  // 1000 to 30000 give the same curves to 0.1% (docs/notes/hdr-merge.md).
   constexpr double kLambda = 10000.0;
   const double lambda = kLambda * data_weight / kCodes;
   for (int z = 1; z + 1 < kCodes; ++z) {
