@@ -5,7 +5,8 @@
 //   3. the object: a sphere located from its outline in the views, or as shoot.json gives it;
 //   4. the probe: the mirror ball located likewise, its photos merged into a lat-long map
 //      in board coordinates, divided by the ball's reflectance (given, or estimated by
-//      a joint fit of the object against the probe);
+//      a joint fit of the object against the probe); a sphere located from its outline
+//      is located again with the probe (what its rim mirrors, predicted);
 //   5. DIR/transforms.json, captures_report.json and summary.txt.
 #include "app/commands.h"
 #include "app/invert_fit.h"
@@ -26,6 +27,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -71,12 +73,15 @@ json sphere_json(const SphereFit& fit) {
                      {"edges", view.points},
                      {"searched", view.samples},
                      {"rms_px", view.rms_px},
-                     {"mean_signed_px", view.mean_signed_px}});
+                     {"mean_signed_px", view.mean_signed_px},
+                     {"rim_mirror", view.rim_mirror}});
   return {{"located", true},
           {"center", vector_json(fit.center)},
           {"radius", fit.radius},
           {"rms_px", fit.rms_px},
           {"rms_mm", fit.rms_mm},
+          {"under_probe",
+           std::any_of(fit.views.begin(), fit.views.end(), [](const SphereViewFit& view) { return view.rim_mirror; })},
           {"views", views},
           {"solver", fit.solver_summary}};
 }
@@ -136,7 +141,8 @@ std::string summary_text(const json& report, const std::string& shoot, const std
                   1e3 * sphere["radius"].get<double>());
     s << line;
     if (sphere["located"].get<bool>()) {
-      std::snprintf(line, sizeof line, ", located from its outline: RMS %.3f px (%.3f mm at the sphere)",
+      std::snprintf(line, sizeof line, ", located from its outline%s: RMS %.3f px (%.3f mm at the sphere)",
+                    sphere.value("under_probe", false) ? " and the probe's reflection in its rim" : "",
                     sphere["rms_px"].get<double>(), sphere["rms_mm"].get<double>());
       s << line;
       for (const json& view : sphere["views"]) {
@@ -179,14 +185,16 @@ class CapturesRun {
         shoot_(shoot),
         brackets_(brackets),
         out_(args.out, "captures_report.json", "capture set"),
-        // Steps: the response (one per bracket read), each merge, registration, sphere, probe, output.
-        progress_(isatty(STDERR_FILENO), int(2 * brackets.size()) + 5) {}
+        // Steps: the response (one per bracket read), each merge, registration, sphere, probe,
+        // the sphere under the probe, output.
+        progress_(isatty(STDERR_FILENO), int(2 * brackets.size()) + 6) {}
 
   int run() {
     merge_brackets();
     register_views();
     locate_object();
     build_probe();
+    locate_object_under_probe();
     estimate_reflectance();
     write_capture_set();
     return 0;
@@ -237,12 +245,13 @@ class CapturesRun {
   }
 
   // The sphere that the object's views (or the ball's, `probe`) show, from its outline.
-  SphereFit locate(bool probe) {
+  // `lighting`: what the sphere's rim mirrors (locate_sphere).
+  SphereFit locate(bool probe, const Environment* lighting = nullptr) {
     std::vector<SphereView> views;
     for (const MergedView& view : views_)
       if (is_probe(view.name) == probe)
         views.push_back({(shoot_.folder / view.name).string(), view.radiance, view.alpha, {}, camera_of(view.name)});
-    return locate_sphere(views);
+    return locate_sphere(views, {}, lighting);
   }
 
   void locate_object() {
@@ -257,23 +266,30 @@ class CapturesRun {
                               float(object.radius)};
       entry = {{"center", object.center}, {"radius", object.radius}, {"located", false}};
     } else {
-      sphere_ = locate(false);
-      object_ = CaptureSphere{sphere_->center.cast<float>(), float(sphere_->radius)};
+      set_located_object(locate(false));
       entry = sphere_json(*sphere_);
     }
     report_["object"] = entry;
     end_stage("sphere");
   }
 
+  void set_located_object(SphereFit fit) {
+    sphere_ = std::move(fit);
+    object_ = CaptureSphere{sphere_->center.cast<float>(), float(sphere_->radius)};
+  }
+
   void build_probe() {
     stage("light probe");
+    make_probe();
+    end_stage("probe");
+  }
+
+  // The probe from the probe_NNN views, if any, and its report.
+  void make_probe() {
     std::vector<ProbeView> views;
     for (const MergedView& view : views_)
       if (is_probe(view.name)) views.push_back({view.name, view.radiance, view.alpha, camera_of(view.name)});
-    if (views.empty()) {
-      end_stage("probe");
-      return;
-    }
+    if (views.empty()) return;
     const MirrorBall ball = locate_ball();
     MirrorBallProbeOptions options;
     std::tie(options.width, options.height) = args_.probe_resolution.pair();
@@ -281,6 +297,7 @@ class CapturesRun {
     // estimated: then it is the lighting times the reflectance.
     if (shoot_.probe.reflectance) options.reflectance = RGBd(shoot_.probe.reflectance->data()).cast<float>();
     probe_ = build_mirror_ball_probe(views, ball, options);
+    ball_on_object_ = report_["ball"].contains("placed");
     report_["probe"] = {{"resolution", {options.width, options.height}},
                         {"covered_fraction", probe_->covered_fraction},
                         {"reflectance", invert_fit::rgb_json(options.reflectance)},
@@ -288,7 +305,23 @@ class CapturesRun {
     for (const ProbeViewContribution& view : probe_->views)
       report_["probe"]["views"].push_back(
           {{"view", view.name}, {"weight_share", view.weight_share}, {"covered_fraction", view.covered_fraction}});
-    end_stage("probe");
+  }
+
+  // Under a detailed background the coat's rim mirrors detail that the outline's model
+  // does not follow, and the probe says what it mirrors (locate_sphere's lighting): the
+  // sphere located from its outline is located again under the probe (its scale does not
+  // matter: each view's is taken from its background). A ball placed where the object
+  // rests follows it, and its probe is built again.
+  void locate_object_under_probe() {
+    if (!sphere_ || !probe_) return;
+    stage("locating the sphere under the probe");
+    EnvironmentOptions options;
+    options.to_world = probe_->to_world;
+    const Environment lighting(probe_->map, options, "the light probe");
+    set_located_object(locate(false, &lighting));
+    report_["object"] = sphere_json(*sphere_);
+    if (ball_on_object_) make_probe();
+    end_stage("sphere_under_probe");
   }
 
   // The mirror ball: as shoot.json gives it; else, given its radius, resting where the
@@ -407,6 +440,7 @@ class CapturesRun {
   Registration registration_;
   CaptureObject object_;
   std::optional<SphereFit> sphere_, ball_;
+  bool ball_on_object_ = false;  // the ball placed where the object rests
   std::optional<MirrorBallProbe> probe_;
 };
 

@@ -72,10 +72,10 @@ int demo_photos(const DemoCommandOptions& args, const std::filesystem::path& out
   double distance = 0.0;
   for (int i = 0; i < 3; ++i)
     distance += std::pow(object["center"][i].get<double>() - truth["object"]["center"][i].get<double>(), 2);
-  std::printf("  sphere centre off by %.3f mm, radius by %+.3f%% (located from its outline in %zu views)\n",
+  std::printf("  sphere centre off by %.3f mm, radius by %+.3f%% (located from its outline in %zu views%s)\n",
               1e3 * std::sqrt(distance),
               100 * (object["radius"].get<double>() / truth["object"]["radius"].get<double>() - 1),
-              object["views"].size());
+              object["views"].size(), object.value("under_probe", false) ? ", under the probe" : "");
   std::printf("  the probe covers %.1f%% of the directions; the summary of every stage is in %s/summary.txt\n",
               100 * report["probe"]["covered_fraction"].get<double>(), captures.c_str());
   return 0;

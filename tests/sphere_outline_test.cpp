@@ -40,18 +40,21 @@ PinholeCamera view_camera(double degrees, int index) {
   return camera;
 }
 
-// The three views of a sphere of material (R0, Rd) at `center` under `environment` (a
-// glaze environment spec), its +Y turned to the board's +Z.
-std::vector<SphereView> render_views(const std::string& environment_spec, float R0, const RGB& Rd,
+// A lat-long map's +Y turned to the board's +Z.
+EnvironmentOptions board_up() {
+  EnvironmentOptions options;
+  options.to_world = Eigen::AngleAxisf(float(M_PI / 2), Vec3::UnitX()).toRotationMatrix();
+  return options;
+}
+
+// The three views of a sphere of material (R0, Rd) at `center` under `environment`.
+std::vector<SphereView> render_views(const Environment& environment, float R0, const RGB& Rd,
                                      const Vec3d& center = kCenter, int views = 3) {
   Scene scene;
   scene.path = "sphere-outline-test";
   scene.materials.push_back({"coated", R0, Rd, -1});
   scene.spheres.push_back({"ball", center.cast<float>(), float(kRadius), 0, Mat3::Identity()});
   const RayTracer tracer(scene);
-  EnvironmentOptions environment_options;
-  environment_options.to_world = Eigen::AngleAxisf(float(M_PI / 2), Vec3::UnitX()).toRotationMatrix();
-  const Environment environment = make_environment(environment_spec, environment_options, 512, 256);
   ShIntegratorOptions options;
   options.supersampling = 3;
   options.refined_supersampling = 8;
@@ -64,6 +67,11 @@ std::vector<SphereView> render_views(const std::string& environment_spec, float 
     result.push_back(std::move(view));
   }
   return result;
+}
+// The same under a glaze environment spec.
+std::vector<SphereView> render_views(const std::string& environment_spec, float R0, const RGB& Rd,
+                                     const Vec3d& center = kCenter, int views = 3) {
+  return render_views(make_environment(environment_spec, board_up(), 512, 256), R0, Rd, center, views);
 }
 
 // What a merge of an 8-bit bracket leaves: 1% multiplicative noise, values quantised to
@@ -200,6 +208,54 @@ TEST(SphereOutline, OneViewIsNotEnough) {
   } catch (const Error& error) {
     EXPECT_NE(std::string(error.what()).find("at least 2 views"), std::string::npos) << error.what();
   }
+}
+
+// A landscape-like map: a bright sky over a darker ground, both with detail (each texel of
+// 64 x 32 log-normal, 50% in its log), which the sphere's rim mirrors.
+Environment detailed_landscape() {
+  Image map(64, 32);
+  Pcg32 rng(19);
+  for (int j = 0; j < map.height; ++j)
+    for (int i = 0; i < map.width; ++i) {
+      const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
+      const float detail = std::exp(0.5f * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
+      const float level = j < map.height / 2 ? 3.0f : 0.6f;
+      map.set(i, j, level * detail * RGB(0.8f, 0.9f, 1.0f));
+    }
+  return Environment(std::move(map), board_up(), "landscape");
+}
+
+// Under a detailed map the rim mirrors detail that the outline's hinges cannot follow:
+// the views' edges come out displaced, each part of the outline its own way. Given the
+// lighting, the rim's mirror is modelled and the outline follows the sphere again.
+TEST(SphereOutline, TheRimsMirrorOfADetailedMapIsModelledUnderTheLighting) {
+  const Environment landscape = detailed_landscape();
+  const std::vector<SphereView> views = render_views(landscape, 0.04f, {0.8f, 0.8f, 0.8f});
+  const SphereFit hinges = locate_sphere(views);
+  const SphereFit mirrored = locate_sphere(views, {}, &landscape);
+  expect_located(hinges, kCenter, "landscape, hinges only");
+  expect_located(mirrored, kCenter, "landscape, the rim's mirror");
+  for (const SphereViewFit& view : mirrored.views) {
+    EXPECT_TRUE(view.rim_mirror) << view.name;
+    // The views' radiance is the lighting's: the scale read off their backgrounds is 1.
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(view.lighting_scale[c], 1.0, 0.02) << view.name;
+  }
+  EXPECT_LT(1e3 * (mirrored.center - kCenter).norm(), 0.5 * 1e3 * (hinges.center - kCenter).norm());
+  EXPECT_LT(mirrored.rms_px, 0.8 * hinges.rms_px);
+}
+
+// A lighting that is not what the views show past the sphere (here: another place's, the
+// office's, for photos taken in the landscape) is not used: no view's background agrees
+// with it, and the outline is located as without a lighting.
+TEST(SphereOutline, ALightingTheBackgroundDisagreesWithIsNotUsed) {
+  const Environment landscape = detailed_landscape();
+  const std::vector<SphereView> views = render_views(landscape, 0.04f, {0.8f, 0.8f, 0.8f});
+  const Environment office = make_environment("procedural:office", board_up(), 256, 128);
+  const SphereFit fit = locate_sphere(views, {}, &office);
+  for (const SphereViewFit& view : fit.views) EXPECT_FALSE(view.rim_mirror) << view.name;
+  const SphereFit hinges = locate_sphere(views);
+  EXPECT_EQ(fit.center, hinges.center);
+  EXPECT_EQ(fit.radius, hinges.radius);
 }
 
 }  // namespace

@@ -1,12 +1,15 @@
 #include "inverse/photos/sphere_outline.h"
 
 #include "renderer/error.h"
+#include "renderer/environment.h"
+#include "renderer/material.h"
 #include "renderer/memory_budget.h"
 
 #include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -14,6 +17,11 @@
 
 namespace glaze {
 namespace {
+
+struct TangentSphere {
+  Vec3d center;
+  double radius;
+};
 
 // A coated sphere's rim as the image shows it. At the outline the coat mirrors the
 // background just behind it (the Fresnel factor is 1 at grazing), so the image does not
@@ -28,13 +36,12 @@ namespace {
 // fit is best (outline_offset).
 class RimProfile {
  public:
-  explicit RimProfile(double blur) {
-    const double sigma = std::sqrt(1.0 / 12.0 + blur * blur + 1.0 / 6.0);
+  explicit RimProfile(double blur) : sigma_(std::sqrt(1.0 / 12.0 + blur * blur + 1.0 / 6.0)) {
     root_.resize(kTable + 1), ramp_.resize(kTable + 1);
     constexpr double kTap = 1.0 / 64.0;
-    const int taps = int(std::ceil(4.0 * sigma / kTap));
+    const int taps = int(std::ceil(4.0 * sigma_ / kTap));
     std::vector<double> weight(2 * taps + 1);  // the Gaussian's taps, the same for every x
-    for (int k = -taps; k <= taps; ++k) weight[k + taps] = std::exp(-0.5 * (k * kTap) * (k * kTap) / (sigma * sigma));
+    for (int k = -taps; k <= taps; ++k) weight[k + taps] = std::exp(-0.5 * (k * kTap) * (k * kTap) / (sigma_ * sigma_));
     for (int i = 0; i <= kTable; ++i) {
       const double x = -kReach + 2.0 * kReach * i / kTable;
       double root = 0.0, ramp = 0.0, total = 0.0;
@@ -47,6 +54,7 @@ class RimProfile {
   }
   double root(double x) const { return lookup(root_, x, std::sqrt(std::max(0.0, -x))); }
   double ramp(double x) const { return lookup(ramp_, x, std::max(0.0, -x)); }
+  double sigma() const { return sigma_; }  // of the Gaussian the hinges are seen through, pixels
 
  private:
   static constexpr double kReach = 8.0;  // pixels: beyond, the blur no longer matters
@@ -57,6 +65,7 @@ class RimProfile {
     const int i = std::min(int(u), kTable - 1);
     return table[i] + (u - i) * (table[i + 1] - table[i]);
   }
+  double sigma_;
   std::vector<double> root_, ramp_;
 };
 
@@ -169,37 +178,106 @@ std::optional<double> halfway_crossing(const EdgeImage& image, int channel, cons
   return crossing;
 }
 
+// What the coat mirrors just inside the outline, which RimProfile's hinges take to be
+// smooth. A ray that meets the sphere at n.v = mu is turned from its way by 2 asin(mu),
+// so the rim's first pixels mirror the lighting over tens of degrees beyond the outline,
+// compressed into a pixel or two: a detailed background (a landscape's ground, seen past
+// the sphere and mirrored in its rim) puts detail there that the hinges cannot follow,
+// and it moves each part of the outline its own way, the same in every round
+// (docs/notes/sphere-outline.md, "The rim's mirror"). Where the lighting is known (the
+// light probe) the mirror is predicted instead: F(mu) L(r(mu)), traced along one outline
+// point's normal (in the plane of its grazing ray and the sphere's centre) in steps of mu
+// that turn the mirrored direction by about 2 pixels' angle, and scaled by the view's
+// radiance over the lighting's (background_scale).
+struct RimMirror {
+  std::vector<double> offsets;  // along the normal from the outline point, pixels (< 0: inside)
+  std::vector<double> spans;    // each offset's share of the profile (the trapezoid rule's)
+  std::vector<double> fresnel;  // the coat's Fresnel factor there
+  std::vector<Vec3> mirrored;   // the direction the coat mirrors there (board frame)
+  const Environment* lighting = nullptr;
+  RGBd scale = RGBd::Zero();  // the view's radiance over the lighting's
+
+  bool empty() const { return offsets.empty() || lighting == nullptr; }
+
+  // F L(mirrored) - L at the outline in `channel`, times the scale: zero outside the
+  // outline, seen through a Gaussian of `sigma` pixels (the hinges' own), on a grid of
+  // kGrid steps a pixel from -reach to reach (entry i at offset -reach + i / kGrid).
+  static constexpr int kGrid = 32;
+  std::vector<double> profile(int channel, double sigma, double reach) const {
+    // The continuous profile is spread onto the grid (linearly, its mass kept), which
+    // runs on inwards as far as the Gaussian reaches: what lies deeper than the grid
+    // blurs into its inner end. Then it is blurred.
+    const int taps = int(std::ceil(4.0 * sigma * kGrid)), cells = int(std::lround(2.0 * reach * kGrid));
+    std::vector<double> spread(cells + taps + 1, 0.0);
+    const double outline = lighting->eval(mirrored.front())[channel];
+    for (size_t j = 0; j < offsets.size(); ++j) {
+      const double u = (offsets[j] + reach) * kGrid + taps;
+      if (!(u >= 0.0 && u < cells + taps)) continue;
+      const int i = int(u);
+      const double mass = scale[channel] * (fresnel[j] * lighting->eval(mirrored[j])[channel] - outline) * spans[j];
+      spread[i] += (1.0 - (u - i)) * mass, spread[i + 1] += (u - i) * mass;
+    }
+    std::vector<double> kernel(2 * taps + 1);
+    for (int k = -taps; k <= taps; ++k) {
+      const double z = k / (sigma * kGrid);
+      kernel[k + taps] = std::exp(-0.5 * z * z) / (std::sqrt(2.0 * M_PI) * sigma);
+    }
+    std::vector<double> blurred(cells + 1, 0.0);
+    for (int i = 0; i <= cells; ++i)
+      for (int k = std::max(-taps, -i - taps); k <= std::min(taps, cells - i); ++k)
+        blurred[i] += spread[i + taps + k] * kernel[k + taps];
+    return blurred;
+  }
+};
+
+// The coat's Fresnel factor at normal incidence that the rim's mirror is modelled with:
+// a dielectric of index 1.5. Near the outline, where the mirror matters, F is within
+// R0 of 1 whatever the coat's R0 is.
+constexpr float kNominalCoatR0 = 0.04f;
+
 // Where a coated sphere's outline lies on the linear profile of `channel` through film
-// point `p` along `n`, near offset t: the offset u whose rim profile (RimProfile) fits
-// the profile best over 2 pixels either side, searched 1.5 pixels either side of t.
-std::optional<double> outline_offset(const EdgeImage& image, int channel, const Vec2d& p, const Vec2d& n, double t) {
+// point `p` along `n`, near offset t: the offset u whose rim profile (RimProfile, plus the
+// rim's mirror where `mirror` is traced) fits the profile best over 2 pixels either side,
+// searched 1.5 pixels either side of t.
+std::optional<double> outline_offset(const EdgeImage& image, int channel, const Vec2d& p, const Vec2d& n, double t,
+                                     const RimMirror& mirror) {
   // 2 pixels either side: the blur's reach, and not much deeper inside, where the
   // mirrored lighting's own detail (compressed towards the rim) departs from the model.
   // Measured on two renders and four simulated shoots: 1 pixel put the radius 0.5% low,
   // 3 pixels 0.27% high on one render, 1.5 and 2 pixels within 0.12% on all six
   // (docs/notes/sphere-outline.md).
   constexpr int kSamples = 8;
-  constexpr double kSpacing = 0.25, kSearch = 1.5, kStep = 1.0 / 32.0;
+  constexpr double kSpacing = 0.25, kSearch = 1.5, kStep = 1.0 / RimMirror::kGrid;
+  constexpr double kReach = kSamples * kSpacing + kSearch;
   Eigen::Matrix<double, 2 * kSamples + 1, 1> values;
   for (int k = -kSamples; k <= kSamples; ++k) {
     const auto value = image.linear_at(channel, p + (t + k * kSpacing) * n);
     if (!value) return std::nullopt;
     values[k + kSamples] = *value;
   }
+  // The mirror is known, not fitted: its detail is what the hinges cannot follow, and
+  // its smooth part is nearly theirs (a free coefficient on it made the fit ill-posed).
+  const std::vector<double> mirrored =
+      mirror.empty() ? std::vector<double>{} : mirror.profile(channel, image.rim().sigma(), kReach);
   // The misfit of the best b0, b1, a, c with the outline at offset t + d.
-  const auto misfit = [&](double d) {
+  const auto misfit = [&](int step) {
+    const double d = step * kStep;
     Eigen::Matrix<double, 2 * kSamples + 1, 4> basis;
+    Eigen::Matrix<double, 2 * kSamples + 1, 1> rest = values;
     for (int k = -kSamples; k <= kSamples; ++k) {
       const double x = k * kSpacing - d;
       basis.row(k + kSamples) << 1.0, x, image.rim().root(x), image.rim().ramp(x);
+      // x lies on the mirror's grid: k kSpacing and d are whole steps of it.
+      const size_t cell = size_t(std::lround((x + kReach) * RimMirror::kGrid));
+      if (!mirrored.empty()) rest[k + kSamples] -= mirrored[cell];
     }
     const Eigen::Matrix4d normal = basis.transpose() * basis;
-    const Eigen::Vector4d fitted = normal.ldlt().solve(basis.transpose() * values);
-    return (values - basis * fitted).squaredNorm();
+    const Eigen::Vector4d fitted = normal.ldlt().solve(basis.transpose() * rest);
+    return (rest - basis * fitted).squaredNorm();
   };
   const int steps = int(std::lround(kSearch / kStep));
   std::vector<double> cost(2 * steps + 1);
-  for (int i = -steps; i <= steps; ++i) cost[i + steps] = misfit(i * kStep);
+  for (int i = -steps; i <= steps; ++i) cost[i + steps] = misfit(i);
   const int best = int(std::min_element(cost.begin(), cost.end()) - cost.begin());
   if (best == 0 || best == 2 * steps) return std::nullopt;  // no minimum within the search
   // A parabola through the best and its neighbours.
@@ -217,7 +295,7 @@ std::optional<double> outline_offset(const EdgeImage& image, int channel, const 
 // between its levels on either side, which is the outline of a pixel-averaged, blurred
 // step.
 std::optional<double> find_edge(const EdgeImage& image, const Vec2d& p, const Vec2d& n, double reach,
-                                const SphereOutlineOptions& options) {
+                                const SphereOutlineOptions& options, const RimMirror& mirror = {}) {
   constexpr double h = 0.5;  // sample spacing, pixels; the derivative spans 2h = 1 pixel
   const int steps = int(std::ceil(reach / h));
   std::vector<double> slope(2 * steps + 1, 0.0), profile(2 * steps + 3);
@@ -240,7 +318,7 @@ std::optional<double> find_edge(const EdgeImage& image, const Vec2d& p, const Ve
   // that peak lies towards the darker side, where a pixel's log changes most.
   std::optional<double> crossing = double(peak - slope.begin() - steps) * h;
   // A coated sphere's rim is no step (RimProfile); a mask's boundary is.
-  if (!image.is_mask()) return outline_offset(image, strongest, p, n, *crossing);
+  if (!image.is_mask()) return outline_offset(image, strongest, p, n, *crossing, mirror);
   for (int pass = 0; pass < 3 && crossing; ++pass) crossing = halfway_crossing(image, strongest, p, n, *crossing);
   return crossing;
 }
@@ -251,6 +329,47 @@ Vec3d to_double(const Vec3& v) { return v.cast<double>(); }
 std::pair<Vec3d, Vec3d> film_ray(const PinholeCamera& camera, const Vec2d& film) {
   const Ray ray = camera.generate_ray(float(film.x()), float(film.y()));
   return {to_double(ray.origin), to_double(ray.direction).normalized()};
+}
+
+// The rim's mirror (RimMirror) inside outline point `p` of `sphere` (outward normal `n`)
+// to `depth` pixels inside, under `lighting` scaled by `scale`. The rays in the plane of
+// p's grazing ray and the centre meet the sphere at n.v = mu where they pass the centre at
+// R sqrt(1 - mu^2); each is reflected exactly and where it meets the sphere is projected
+// through the lens. Empty when the camera is inside the sphere or a ray leaves the film.
+RimMirror trace_rim_mirror(const PinholeCamera& camera, const TangentSphere& sphere, const Vec2d& p, const Vec2d& n,
+                           double depth, const Environment& lighting, const RGBd& scale) {
+  const Vec3d origin = to_double(camera.position()), to_center = sphere.center - origin;
+  const double distance = to_center.norm(), R = sphere.radius;
+  if (!(distance > R && R > 0.0)) return {};
+  const Vec3d axis = to_center / distance, grazing = film_ray(camera, p).second;
+  const Vec3d outward = (grazing - grazing.dot(axis) * axis).normalized();
+  const Eigen::Affine3f world_to_camera = camera.camera_to_world.inverse();
+  // mu in steps that turn the mirrored direction (by 2 asin mu) about 2 pixels' angle.
+  const double step = 1.0 / std::max(double(camera.fl_x), 1.0);
+  RimMirror mirror;
+  mirror.lighting = &lighting;
+  mirror.scale = scale;
+  for (double mu = 0.0; mu <= 1.0; mu += step) {
+    const double sine = R * std::sqrt(1.0 - mu * mu) / distance, cosine = std::sqrt(1.0 - sine * sine);
+    const Vec3d direction = cosine * axis + sine * outward;
+    const Vec3d hit = origin + (distance * cosine - R * mu) * direction;
+    const Vec3d normal = (hit - sphere.center) / R;
+    const auto seen = camera.project(world_to_camera * hit.cast<float>());
+    if (!seen) return {};
+    const double offset = (seen->cast<double>() - p).dot(n);
+    mirror.offsets.push_back(offset);
+    mirror.fresnel.push_back(schlick_fresnel(double(kNominalCoatR0), mu));
+    mirror.mirrored.push_back((direction - 2.0 * direction.dot(normal) * normal).cast<float>());
+    if (offset < -depth) break;
+  }
+  // The trapezoid rule's weights over the offsets, which run inwards from 0.
+  const size_t count = mirror.offsets.size();
+  mirror.spans.assign(count, 0.0);
+  for (size_t j = 0; j + 1 < count; ++j) {
+    const double gap = 0.5 * (mirror.offsets[j] - mirror.offsets[j + 1]);
+    mirror.spans[j] += gap, mirror.spans[j + 1] += gap;
+  }
+  return mirror;
 }
 
 // The outline points (film) and their outward normals (film, unit).
@@ -298,11 +417,6 @@ Cone circle_cone(const PinholeCamera& camera, const Vec2d& centre, double radius
   }
   return {apex, axis, sum / kPoints};
 }
-
-struct TangentSphere {
-  Vec3d center;
-  double radius;
-};
 
 // The sphere both cones are tangent to, from the closest approach of their axes; nothing
 // when they do not meet in front of both cameras or disagree about its size.
@@ -381,13 +495,65 @@ struct ViewEdges {
   int samples = 0;
 };
 
+// A view's radiance over `lighting`'s, per channel, where the view sees the lighting
+// itself: the background around the sphere's outline (from 3 pixels out to half a radius),
+// the median of the ratios over 64 directions at each of 4 distances. Nothing where fewer
+// than a quarter of them can be read, or where the lighting does not explain the
+// background's variation: the logs of the ratios must scatter (median absolute deviation)
+// by less than half as much as the background's own logs, or by under 5% where the
+// background is nearly even. Otherwise the background is not the lighting at infinity (a
+// table or a wall nearby, another lighting) and the rim's mirror is not predicted from it.
+std::optional<RGBd> background_scale(const EdgeImage& image, const PinholeCamera& camera, const TangentSphere& sphere,
+                                     const Environment& lighting) {
+  constexpr int kAngles = 64, kRings = 4;
+  const OutlineSamples outline = outline_samples(camera, sphere.center, sphere.radius, kAngles);
+  if (outline.points.empty() || image.is_mask()) return std::nullopt;
+  const double radius_px = outline_radius_px(outline.points);
+  std::array<std::vector<double>, 3> ratios, levels;
+  for (size_t k = 0; k < outline.points.size(); ++k)
+    for (int ring = 0; ring < kRings; ++ring) {
+      const Vec2d film = outline.points[k] + (3.0 + 0.5 * radius_px * ring / (kRings - 1)) * outline.normals[k];
+      const RGB light = lighting.eval(film_ray(camera, film).second.cast<float>());
+      for (int c = 0; c < 3; ++c) {
+        const auto value = image.linear_at(c, film);
+        if (!(value && *value > 0.0 && light[c] > 0.0f)) continue;
+        ratios[c].push_back(std::log(*value / light[c]));
+        levels[c].push_back(std::log(*value));
+      }
+    }
+  // The median of `logs`, and their median absolute deviation from it.
+  const auto median_and_spread = [](std::vector<double> logs) {
+    std::nth_element(logs.begin(), logs.begin() + logs.size() / 2, logs.end());
+    const double median = logs[logs.size() / 2];
+    for (double& value : logs) value = std::abs(value - median);
+    std::nth_element(logs.begin(), logs.begin() + logs.size() / 2, logs.end());
+    return std::pair{median, logs[logs.size() / 2]};
+  };
+  RGBd scale;
+  for (int c = 0; c < 3; ++c) {
+    if (ratios[c].size() < kAngles * kRings / 4) return std::nullopt;
+    const auto [median, spread] = median_and_spread(ratios[c]);
+    if (spread > std::max(0.05, 0.5 * median_and_spread(levels[c]).second)) return std::nullopt;
+    scale[c] = std::exp(median);
+  }
+  return scale;
+}
+
+// One view's outline edges, looked for around `sphere`'s outline; with the rim's mirror
+// where `lighting` is given (the view's radiance is `scale` times it).
 ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, const TangentSphere& sphere, double reach,
-                       const SphereOutlineOptions& options) {
+                       const SphereOutlineOptions& options, const Environment* lighting, const RGBd& scale) {
   ViewEdges edges;
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, options.outline_samples);
   edges.samples = int(samples.points.size());
+  // The mirror reaches as deep as outline_offset's samples and search, and the rim's
+  // blur beyond them.
+  const double depth = 3.5 + 3.0 * image.rim().sigma();
   for (size_t k = 0; k < samples.points.size(); ++k) {
-    const auto offset = find_edge(image, samples.points[k], samples.normals[k], reach, options);
+    const RimMirror mirror =
+        lighting ? trace_rim_mirror(camera, sphere, samples.points[k], samples.normals[k], depth, *lighting, scale)
+                 : RimMirror{};
+    const auto offset = find_edge(image, samples.points[k], samples.normals[k], reach, options, mirror);
     if (!offset) continue;
     const Vec2d film = samples.points[k] + *offset * samples.normals[k];
     const auto [origin, direction] = film_ray(camera, film);
@@ -514,7 +680,8 @@ std::vector<Vec2d> sphere_outline(const PinholeCamera& camera, const Vec3d& cent
   return outline;
 }
 
-SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlineOptions& options) {
+SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlineOptions& options,
+                        const Environment* lighting) {
   if (views.size() < 2)
     throw Error((views.empty() ? std::string("the shoot") : views.front().name) +
                 ": a sphere is located from its outline in at least 2 views; photograph it from another position");
@@ -527,6 +694,11 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
     images.emplace_back(view, options.blur_pixels);
   }
   TangentSphere sphere = initial_sphere(views, images, options);
+  // The views' radiance over the lighting's, where the lighting models their rims' mirror.
+  std::vector<std::optional<RGBd>> scales(views.size());
+  if (lighting)
+    for (size_t v = 0; v < views.size(); ++v)
+      scales[v] = background_scale(images[v], views[v].camera, sphere, *lighting);
 
   std::vector<ViewEdges> edges(views.size());
   std::string summary;
@@ -535,7 +707,8 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
     for (size_t v = 0; v < views.size(); ++v) {
       const double radius_px = outline_radius_px(sphere_outline(views[v].camera, sphere.center, sphere.radius, 16));
       const double reach = std::max(1.5, 0.1 * radius_px / double(1 << round));
-      edges[v] = detect_edges(images[v], views[v].camera, sphere, reach, options);
+      edges[v] = detect_edges(images[v], views[v].camera, sphere, reach, options, scales[v] ? lighting : nullptr,
+                              scales[v].value_or(RGBd::Zero()));
     }
     sphere = fit_cones(edges, views, sphere, everything, &summary);
   }
@@ -568,6 +741,8 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
     SphereViewFit share;
     share.name = views[v].name;
     share.samples = edges[v].samples;
+    share.rim_mirror = scales[v].has_value();
+    share.lighting_scale = scales[v].value_or(RGBd::Zero());
     double sum = 0.0, sum2 = 0.0;
     for (size_t k = 0; k < edges[v].origins.size(); ++k) {
       if (!used[v][k]) continue;

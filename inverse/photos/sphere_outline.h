@@ -11,10 +11,14 @@
 // the cones of all views (Ceres, a robust loss). The log makes an edge's strength its
 // contrast, whatever the exposure; the edge looked for is the strongest one near the
 // predicted outline in any colour channel, and the robust loss and the edges' rejection
-// leave out the few that are a reflection on the sphere or the background's.
+// leave out the few that are a reflection on the sphere or the background's. Where the
+// lighting is known, what the coat mirrors just inside the outline (the lighting over
+// tens of degrees beyond it, compressed into a pixel or two) is predicted and taken off
+// the edges' profiles, so that a detailed background does not move them.
 #pragma once
 
 #include "renderer/camera.h"
+#include "renderer/environment.h"
 #include "renderer/image.h"
 #include "renderer/math.h"
 
@@ -51,8 +55,12 @@ struct SphereViewFit {
   int samples = 0;              // places along the outline where an edge was looked for
   double rms_px = 0.0;          // RMS residual of those edges, pixels
   double mean_signed_px = 0.0;  // mean residual, pixels: > 0 where the edges lie outside the fitted outline
-  std::vector<Vec2d> edges;     // the edges used, film coordinates (pixels)
-  std::vector<Vec2d> outline;   // the fitted sphere's outline, projected through the view's lens
+  // The rim's mirror was modelled (a lighting was given and the view's background agrees
+  // with it), the view's radiance being lighting_scale times the lighting's.
+  bool rim_mirror = false;
+  RGBd lighting_scale = RGBd::Zero();
+  std::vector<Vec2d> edges;    // the edges used, film coordinates (pixels)
+  std::vector<Vec2d> outline;  // the fitted sphere's outline, projected through the view's lens
 };
 
 struct SphereFit {
@@ -67,7 +75,13 @@ struct SphereFit {
 // Locates the sphere that `views` show. Throws glaze::Error, naming the view's folder and
 // what to do, when there are fewer than two views, when the sphere is not found in a
 // view, and when a view disagrees with the others about where it is.
-SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlineOptions& options = {});
+//
+// `lighting`, where known (the light probe, board frame), models what the sphere's coat
+// mirrors just inside its outline, which under a detailed background moves the edges
+// (sphere_outline.cpp, RimMirror). It is used in each view whose background (the
+// lighting seen past the sphere) it matches up to a scale.
+SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlineOptions& options = {},
+                        const Environment* lighting = nullptr);
 
 // The outline of the sphere (centre, radius) in `camera`'s film: `points` film points
 // around it, through the lens; empty when the camera is inside the sphere or any part of
