@@ -26,19 +26,21 @@ using testing::run_glaze;
 using testing::TemporaryDirectory;
 
 // A 3-view shoot of the sphere of `scene` (scaled to 5 cm) under `environment` through a
-// barrel-distorted lens, 640x480. The board is 1.5 sphere diameters along a row (15 mm
-// squares): framed to fill the picture, it leaves the sphere about 90 px across in
-// radius, which the probe needs (docs/notes/light-probe.md: its error grows as the
-// ball's image shrinks). `calibrate`: the intrinsics and lens come from 8 calibration
-// photos, else shoot.json gives them.
+// barrel-distorted lens, 960x720. The board is 1.5 sphere diameters along a row (15 mm
+// squares): framed to fill the picture, it leaves the sphere about 130 px in radius, which
+// the probe needs (docs/notes/light-probe.md: its error grows as the ball's image
+// shrinks), and so does the joint fit under a detailed map: at 640x480 (90 px) the views'
+// registration on the board is what limits it there (docs/notes/photo-shoots.md). Any
+// camera today puts many more pixels on the sphere. `calibrate`: the intrinsics and lens
+// come from 8 calibration photos, else shoot.json gives them.
 ShootSimulation simulated_shoot(const TemporaryDirectory& dir, const std::string& scene,
                                 const std::optional<std::string>& environment, bool calibrate) {
   ShootSimulation shoot;
   shoot.scene = testing::scenes_dir() + scene;
   if (environment) shoot.environment = EnvironmentSpec{*environment, {}};
   shoot.out = dir.path() / "shoot";
-  shoot.width = 640;
-  shoot.height = 480;
+  shoot.width = 960;
+  shoot.height = 720;
   shoot.lens = LensDistortion{LensDistortion::Model::opencv, -0.12, 0.03, 0.0, 0.0, 0.0005, -0.0003};
   shoot.board.square = 0.015;
   shoot.calibration_photos = calibrate ? 8 : 0;
@@ -187,39 +189,37 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
 
 // The bounds below hold each case to the where it meets it with a margin, and
 // otherwise to what it measures with a margin (the simulation is deterministic, but
-// another CPU rounds differently). The joint fit's Rd meets its bound on the office's
-// two shoots (on the white sphere's too narrowly to assert it) and misses it under
-// lebombo, where the same photos merged through the true response miss it as well
-// (0.0097 and 0.0085): what is left there is mostly the sphere's place from its outline,
-// then the registration's (docs/notes/photo-shoots.md, "What limits them").
-// Measured in the office: the probe 3.2%, Rd under it 0.0027, the reflectance 2.0% and
-// the joint fit R0 +0.0003, Rd 0.0026.
+// another CPU rounds differently). The joint fit's Rd meets its bound under lebombo and
+// on the red sphere in the office too narrowly to assert it; on the white sphere in the
+// office it misses by a tenth, in the red channel alone: the camera response's per-channel
+// error, which the ideal capture set of the same views does not have (it reads 0.0022;
+// docs/notes/photo-shoots.md, "The rim's mirror").
+// Measured in the office: the probe 2.6%, Rd under it 0.0016, the reflectance 1.5% and
+// the joint fit R0 +0.0002, Rd 0.0059.
 TEST(PhotoShootAcceptance, RedSphereInTheOffice) {
-  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.03, 0.002, 0.006});
+  expect_shoot_recovered("red_sphere_office.gltf", std::nullopt, true, {0.05, 0.01, 0.03, 0.002, 0.007});
 }
-// Measured: the probe 3.4%, the reflectance 1.6%, the joint fit R0 +0.0003 and Rd 0.0056.
+// Measured: the probe 2.6%, the reflectance 0.9%, the joint fit R0 +0.0001 and Rd 0.0065.
 TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
-  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.007});
+  expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.008});
 }
-// Under lebombo: measured, the probe 3.2%, the reflectance 1.5%, the joint R0 +0.0009
-// and Rd 0.0093.
+// Under lebombo: measured, the probe 2.5%, the reflectance 0.4%, the joint R0 -0.0001
+// and Rd 0.0031.
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.011});
+  expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.006});
 }
-// Measured: the probe 2.8%, the reflectance 1.5%, the joint R0 -0.0004 and Rd 0.0095.
+// Measured: the probe 2.5%, the reflectance 0.5%, the joint R0 -0.0002 and Rd 0.0031.
 TEST(PhotoShootAcceptance, WhiteSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
-  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.011});
+  expect_shoot_recovered("white_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.006});
 }
 
 // From noise-free 16-bit linear photos (the sphere given, the reflectance not) the
 // reflectance estimate meets the 3% at the 8-bit shoots' 30 degrees, and the
-// joint fit its R0 bound: the fits and the simulated photos agree on the diffuse term's
-// bands (the simulator renders them full band, as a photograph has them). The joint Rd
-// is at twice the bound, set by the registration: the cameras placed from the
-// board photos are 0.02-0.06 mm off, and the same captures with the true cameras give
-// Rd within 0.0032. Measured: R0 +0.0001, Rd 0.0070, the reflectance within 0.7%.
+// joint fit its bounds: the fits and the simulated photos agree on the diffuse term's
+// bands (the simulator renders them full band, as a photograph has them). Measured:
+// R0 +0.0000, Rd 0.0038, the reflectance within 0.3%.
 TEST(PhotoShootAcceptance, NoiseFreePhotosMeetTheReflectanceBound) {
   TemporaryDirectory dir;
   ShootSimulation options = simulated_shoot(dir, "red_sphere_office.gltf", std::nullopt, false);
@@ -235,7 +235,7 @@ TEST(PhotoShootAcceptance, NoiseFreePhotosMeetTheReflectanceBound) {
   std::printf("noise-free photos: joint R0 %+.4f Rd %.4f, reflectance %.2f%%\n", errors.joint_R0, errors.joint_Rd,
               100 * errors.reflectance);
   EXPECT_LT(std::abs(errors.joint_R0), 0.001);
-  EXPECT_LT(errors.joint_Rd, 0.009);
+  EXPECT_LT(errors.joint_Rd, 0.006);
   EXPECT_LT(errors.reflectance, 0.015) << probe.dump();
 }
 
