@@ -186,7 +186,7 @@ class CapturesRun {
         brackets_(brackets),
         out_(args.out, "captures_report.json", "capture set"),
         // Steps: the response (one per bracket read), each merge, registration, sphere, probe,
-        // the sphere under the probe, output.
+        // the sphere under the probe, the reflectance, output (a stage skipped still counts).
         progress_(isatty(STDERR_FILENO), int(2 * brackets.size()) + 6) {}
 
   int run() {
@@ -312,15 +312,22 @@ class CapturesRun {
   // sphere located from its outline is located again under the probe (its scale does not
   // matter: each view's is taken from its background). A ball placed where the object
   // rests follows it, and its probe is built again.
+  // Should the second location fail (too few edges, its views in disagreement), the
+  // first stands, with a warning.
   void locate_object_under_probe() {
-    if (!sphere_ || !probe_) return;
+    if (!sphere_ || !probe_) return progress_.advance();
     stage("locating the sphere under the probe");
     EnvironmentOptions options;
     options.to_world = probe_->to_world;
     const Environment lighting(probe_->map, options, "the light probe");
-    set_located_object(locate(false, &lighting));
-    report_["object"] = sphere_json(*sphere_);
-    if (ball_on_object_) make_probe();
+    try {
+      set_located_object(locate(false, &lighting));
+      report_["object"] = sphere_json(*sphere_);
+      if (ball_on_object_) make_probe();
+    } catch (const Error& error) {
+      warn(std::string(error.what()) + " (locating the sphere again with the probe's reflection in its rim: " +
+           "the sphere located from its outline alone is kept)");
+    }
     end_stage("sphere_under_probe");
   }
 
@@ -371,7 +378,7 @@ class CapturesRun {
   // recovers the lighting at its absolute scale, which the probe (made with reflectance
   // 1) shows times the reflectance; their ratio over the directions both see is it.
   void estimate_reflectance() {
-    if (!probe_ || shoot_.probe.reflectance) return;
+    if (!probe_ || shoot_.probe.reflectance) return progress_.advance();
     stage("estimating the ball's reflectance");
     json seconds;
     invert_fit::InvertFitOptions fit_options;

@@ -204,7 +204,7 @@ TEST(PhotoShootAcceptance, WhiteSphereInTheOffice) {
   expect_shoot_recovered("white_sphere_office.gltf", std::nullopt, false, {0.05, 0.01, 0.03, 0.002, 0.008});
 }
 // Under lebombo: measured, the probe 2.5%, the reflectance 0.4%, the joint R0 -0.0001
-// and Rd 0.0031.
+// and Rd 0.0032.
 TEST(PhotoShootAcceptance, RedSphereUnderARealMap) {
   GLAZE_REQUIRE_ENVMAP(map, "lebombo_1k.hdr");
   expect_shoot_recovered("red_sphere_office.gltf", map.string(), false, {0.05, 0.01, 0.03, 0.002, 0.006});

@@ -230,6 +230,12 @@ struct RimMirror {
   }
 };
 
+// How far to either side of a candidate outline outline_offset reads the profile
+// (kRimSamples * kRimSpacing) and how far from where the edge was seen it searches.
+constexpr int kRimSamples = 8;
+constexpr double kRimSpacing = 0.25, kRimSearch = 1.5;
+constexpr double kRimExtent = kRimSamples * kRimSpacing + kRimSearch;
+
 // The coat's Fresnel factor at normal incidence that the rim's mirror is modelled with:
 // a dielectric of index 1.5. Near the outline, where the mirror matters, F is within
 // R0 of 1 whatever the coat's R0 is.
@@ -246,9 +252,9 @@ std::optional<double> outline_offset(const EdgeImage& image, int channel, const 
   // Measured on two renders and four simulated shoots: 1 pixel put the radius 0.5% low,
   // 3 pixels 0.27% high on one render, 1.5 and 2 pixels within 0.12% on all six
   // (docs/notes/sphere-outline.md).
-  constexpr int kSamples = 8;
-  constexpr double kSpacing = 0.25, kSearch = 1.5, kStep = 1.0 / RimMirror::kGrid;
-  constexpr double kReach = kSamples * kSpacing + kSearch;
+  constexpr int kSamples = kRimSamples;
+  constexpr double kSpacing = kRimSpacing, kSearch = kRimSearch, kReach = kRimExtent;
+  constexpr double kStep = 1.0 / RimMirror::kGrid;
   Eigen::Matrix<double, 2 * kSamples + 1, 1> values;
   for (int k = -kSamples; k <= kSamples; ++k) {
     const auto value = image.linear_at(channel, p + (t + k * kSpacing) * n);
@@ -335,7 +341,7 @@ std::pair<Vec3d, Vec3d> film_ray(const PinholeCamera& camera, const Vec2d& film)
 // to `depth` pixels inside, under `lighting` scaled by `scale`. The rays in the plane of
 // p's grazing ray and the centre meet the sphere at n.v = mu where they pass the centre at
 // R sqrt(1 - mu^2); each is reflected exactly and where it meets the sphere is projected
-// through the lens. Empty when the camera is inside the sphere or a ray leaves the film.
+// through the lens. Empty when the camera is inside the sphere or a point is behind it.
 RimMirror trace_rim_mirror(const PinholeCamera& camera, const TangentSphere& sphere, const Vec2d& p, const Vec2d& n,
                            double depth, const Environment& lighting, const RGBd& scale) {
   const Vec3d origin = to_double(camera.position()), to_center = sphere.center - origin;
@@ -546,9 +552,9 @@ ViewEdges detect_edges(const EdgeImage& image, const PinholeCamera& camera, cons
   ViewEdges edges;
   const OutlineSamples samples = outline_samples(camera, sphere.center, sphere.radius, options.outline_samples);
   edges.samples = int(samples.points.size());
-  // The mirror reaches as deep as outline_offset's samples and search, and the rim's
-  // blur beyond them.
-  const double depth = 3.5 + 3.0 * image.rim().sigma();
+  // The mirror reaches as deep as outline_offset's samples and search, and as far beyond
+  // them as RimMirror::profile's Gaussian reaches.
+  const double depth = kRimExtent + 4.0 * image.rim().sigma();
   for (size_t k = 0; k < samples.points.size(); ++k) {
     const RimMirror mirror =
         lighting ? trace_rim_mirror(camera, sphere, samples.points[k], samples.normals[k], depth, *lighting, scale)
@@ -694,17 +700,16 @@ SphereFit locate_sphere(const std::vector<SphereView>& views, const SphereOutlin
     images.emplace_back(view, options.blur_pixels);
   }
   TangentSphere sphere = initial_sphere(views, images, options);
-  // The views' radiance over the lighting's, where the lighting models their rims' mirror.
+  // The views' radiance over the lighting's, where the lighting models their rims' mirror:
+  // read off each round's sphere, as the seed's outline may lie a few pixels off.
   std::vector<std::optional<RGBd>> scales(views.size());
-  if (lighting)
-    for (size_t v = 0; v < views.size(); ++v)
-      scales[v] = background_scale(images[v], views[v].camera, sphere, *lighting);
 
   std::vector<ViewEdges> edges(views.size());
   std::string summary;
   const auto everything = [](size_t, size_t) { return true; };
   for (int round = 0; round < options.refinements; ++round) {
     for (size_t v = 0; v < views.size(); ++v) {
+      if (lighting) scales[v] = background_scale(images[v], views[v].camera, sphere, *lighting);
       const double radius_px = outline_radius_px(sphere_outline(views[v].camera, sphere.center, sphere.radius, 16));
       const double reach = std::max(1.5, 0.1 * radius_px / double(1 << round));
       edges[v] = detect_edges(images[v], views[v].camera, sphere, reach, options, scales[v] ? lighting : nullptr,
