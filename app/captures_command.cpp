@@ -297,7 +297,6 @@ class CapturesRun {
     // estimated: then it is the lighting times the reflectance.
     if (shoot_.probe.reflectance) options.reflectance = RGBd(shoot_.probe.reflectance->data()).cast<float>();
     probe_ = build_mirror_ball_probe(views, ball, options);
-    ball_on_object_ = report_["ball"].contains("placed");
     report_["probe"] = {{"resolution", {options.width, options.height}},
                         {"covered_fraction", probe_->covered_fraction},
                         {"reflectance", invert_fit::rgb_json(options.reflectance)},
@@ -323,7 +322,7 @@ class CapturesRun {
     try {
       set_located_object(locate(false, &lighting));
       report_["object"] = sphere_json(*sphere_);
-      if (ball_on_object_) make_probe();
+      if (ball_rests_on_object()) make_probe();
     } catch (const Error& error) {
       warn(std::string(error.what()) + " (locating the sphere again with the probe's reflection in its rim: " +
            "the sphere located from its outline alone is kept)");
@@ -336,13 +335,16 @@ class CapturesRun {
   // object's place on the table, the board's plane z = 0); else located from its outline.
   // A chrome ball's outline is weak where it mirrors the background at grazing angles:
   // its location is the least reliable of the three, hence the warning.
+  // shoot.json gives the ball's radius alone: it is placed where the object rests.
+  bool ball_rests_on_object() const { return !shoot_.probe.center && shoot_.probe.radius; }
+
   MirrorBall locate_ball() {
     const ShootProbe& given = shoot_.probe;
     if (given.center) {
       report_["ball"] = {{"center", *given.center}, {"radius", *given.radius}, {"located", false}};
       return {Vec3d(given.center->data()), *given.radius};
     }
-    if (given.radius) {
+    if (ball_rests_on_object()) {
       const CaptureSphere* sphere = std::get_if<CaptureSphere>(&object_);
       if (!sphere)
         throw Error(shoot_.file +
@@ -447,7 +449,6 @@ class CapturesRun {
   Registration registration_;
   CaptureObject object_;
   std::optional<SphereFit> sphere_, ball_;
-  bool ball_on_object_ = false;  // the ball placed where the object rests
   std::optional<MirrorBallProbe> probe_;
 };
 

@@ -34,22 +34,35 @@ struct TangentSphere {
 // Gaussian of variance 1/12 + blur^2 + 1/6 along any direction. The two hinges, blurred
 // so, are tabulated once; b0, b1, a and c are linear, and the outline is where the
 // fit is best (outline_offset).
+// The Gaussian is sampled every `tap` pixels out to 4 sigma either side, its taps summing
+// to 1 (gaussian_taps); RimMirror's mirror is seen through the same.
+std::vector<double> gaussian_taps(double sigma, double tap) {
+  const int taps = int(std::ceil(4.0 * sigma / tap));
+  std::vector<double> weight(2 * taps + 1);
+  double total = 0.0;
+  for (int k = -taps; k <= taps; ++k) {
+    const double z = k * tap / sigma;
+    total += weight[k + taps] = std::exp(-0.5 * z * z);
+  }
+  for (double& w : weight) w /= total;
+  return weight;
+}
+
 class RimProfile {
  public:
   explicit RimProfile(double blur) : sigma_(std::sqrt(1.0 / 12.0 + blur * blur + 1.0 / 6.0)) {
     root_.resize(kTable + 1), ramp_.resize(kTable + 1);
     constexpr double kTap = 1.0 / 64.0;
-    const int taps = int(std::ceil(4.0 * sigma_ / kTap));
-    std::vector<double> weight(2 * taps + 1);  // the Gaussian's taps, the same for every x
-    for (int k = -taps; k <= taps; ++k) weight[k + taps] = std::exp(-0.5 * (k * kTap) * (k * kTap) / (sigma_ * sigma_));
+    const std::vector<double> weight = gaussian_taps(sigma_, kTap);  // the same for every x
+    const int taps = int(weight.size() / 2);
     for (int i = 0; i <= kTable; ++i) {
       const double x = -kReach + 2.0 * kReach * i / kTable;
-      double root = 0.0, ramp = 0.0, total = 0.0;
+      double root = 0.0, ramp = 0.0;
       for (int k = -taps; k <= taps; ++k) {
         const double w = weight[k + taps], inside = std::max(0.0, k * kTap - x);
-        root += w * std::sqrt(inside), ramp += w * inside, total += w;
+        root += w * std::sqrt(inside), ramp += w * inside;
       }
-      root_[i] = root / total, ramp_[i] = ramp / total;
+      root_[i] = root, ramp_[i] = ramp;
     }
   }
   double root(double x) const { return lookup(root_, x, std::sqrt(std::max(0.0, -x))); }
@@ -207,7 +220,8 @@ struct RimMirror {
     // The continuous profile is spread onto the grid (linearly, its mass kept), which
     // runs on inwards as far as the Gaussian reaches: what lies deeper than the grid
     // blurs into its inner end. Then it is blurred.
-    const int taps = int(std::ceil(4.0 * sigma * kGrid)), cells = int(std::lround(2.0 * reach * kGrid));
+    const std::vector<double> kernel = gaussian_taps(sigma, 1.0 / kGrid);
+    const int taps = int(kernel.size() / 2), cells = int(std::lround(2.0 * reach * kGrid));
     std::vector<double> spread(cells + taps + 1, 0.0);
     const double outline = lighting->eval(mirrored.front())[channel];
     for (size_t j = 0; j < offsets.size(); ++j) {
@@ -217,21 +231,22 @@ struct RimMirror {
       const double mass = scale[channel] * (fresnel[j] * lighting->eval(mirrored[j])[channel] - outline) * spans[j];
       spread[i] += (1.0 - (u - i)) * mass, spread[i + 1] += (u - i) * mass;
     }
-    std::vector<double> kernel(2 * taps + 1);
-    for (int k = -taps; k <= taps; ++k) {
-      const double z = k / (sigma * kGrid);
-      kernel[k + taps] = std::exp(-0.5 * z * z) / (std::sqrt(2.0 * M_PI) * sigma);
-    }
+    // A mass spread over a cell of 1 / kGrid pixels: its density is kGrid times it.
     std::vector<double> blurred(cells + 1, 0.0);
     for (int i = 0; i <= cells; ++i)
       for (int k = std::max(-taps, -i - taps); k <= std::min(taps, cells - i); ++k)
-        blurred[i] += spread[i + taps + k] * kernel[k + taps];
+        blurred[i] += kGrid * spread[i + taps + k] * kernel[k + taps];
     return blurred;
   }
 };
 
 // How far to either side of a candidate outline outline_offset reads the profile
-// (kRimSamples * kRimSpacing) and how far from where the edge was seen it searches.
+// (kRimSamples * kRimSpacing) and how far from where the edge was seen it searches. 2
+// pixels either side: the blur's reach, and not much deeper inside, where the mirrored
+// lighting's own detail (compressed towards the rim) departs from the hinges. Measured on
+// two renders and four simulated shoots: 1 pixel put the radius 0.5% low, 3 pixels 0.27%
+// high on one render, 1.5 and 2 pixels within 0.12% on all six
+// (docs/notes/sphere-outline.md).
 constexpr int kRimSamples = 8;
 constexpr double kRimSpacing = 0.25, kRimSearch = 1.5;
 constexpr double kRimExtent = kRimSamples * kRimSpacing + kRimSearch;
@@ -247,41 +262,34 @@ constexpr float kNominalCoatR0 = 0.04f;
 // searched 1.5 pixels either side of t.
 std::optional<double> outline_offset(const EdgeImage& image, int channel, const Vec2d& p, const Vec2d& n, double t,
                                      const RimMirror& mirror) {
-  // 2 pixels either side: the blur's reach, and not much deeper inside, where the
-  // mirrored lighting's own detail (compressed towards the rim) departs from the model.
-  // Measured on two renders and four simulated shoots: 1 pixel put the radius 0.5% low,
-  // 3 pixels 0.27% high on one render, 1.5 and 2 pixels within 0.12% on all six
-  // (docs/notes/sphere-outline.md).
-  constexpr int kSamples = kRimSamples;
-  constexpr double kSpacing = kRimSpacing, kSearch = kRimSearch, kReach = kRimExtent;
   constexpr double kStep = 1.0 / RimMirror::kGrid;
-  Eigen::Matrix<double, 2 * kSamples + 1, 1> values;
-  for (int k = -kSamples; k <= kSamples; ++k) {
-    const auto value = image.linear_at(channel, p + (t + k * kSpacing) * n);
+  Eigen::Matrix<double, 2 * kRimSamples + 1, 1> values;
+  for (int k = -kRimSamples; k <= kRimSamples; ++k) {
+    const auto value = image.linear_at(channel, p + (t + k * kRimSpacing) * n);
     if (!value) return std::nullopt;
-    values[k + kSamples] = *value;
+    values[k + kRimSamples] = *value;
   }
   // The mirror is known, not fitted: its detail is what the hinges cannot follow, and
   // its smooth part is nearly theirs (a free coefficient on it made the fit ill-posed).
   const std::vector<double> mirrored =
-      mirror.empty() ? std::vector<double>{} : mirror.profile(channel, image.rim().sigma(), kReach);
+      mirror.empty() ? std::vector<double>{} : mirror.profile(channel, image.rim().sigma(), kRimExtent);
   // The misfit of the best b0, b1, a, c with the outline at offset t + d.
   const auto misfit = [&](int step) {
     const double d = step * kStep;
-    Eigen::Matrix<double, 2 * kSamples + 1, 4> basis;
-    Eigen::Matrix<double, 2 * kSamples + 1, 1> rest = values;
-    for (int k = -kSamples; k <= kSamples; ++k) {
-      const double x = k * kSpacing - d;
-      basis.row(k + kSamples) << 1.0, x, image.rim().root(x), image.rim().ramp(x);
-      // x lies on the mirror's grid: k kSpacing and d are whole steps of it.
-      const size_t cell = size_t(std::lround((x + kReach) * RimMirror::kGrid));
-      if (!mirrored.empty()) rest[k + kSamples] -= mirrored[cell];
+    Eigen::Matrix<double, 2 * kRimSamples + 1, 4> basis;
+    Eigen::Matrix<double, 2 * kRimSamples + 1, 1> rest = values;
+    for (int k = -kRimSamples; k <= kRimSamples; ++k) {
+      const double x = k * kRimSpacing - d;
+      basis.row(k + kRimSamples) << 1.0, x, image.rim().root(x), image.rim().ramp(x);
+      // x lies on the mirror's grid: k kRimSpacing and d are whole steps of it.
+      const size_t cell = size_t(std::lround((x + kRimExtent) * RimMirror::kGrid));
+      if (!mirrored.empty()) rest[k + kRimSamples] -= mirrored[cell];
     }
     const Eigen::Matrix4d normal = basis.transpose() * basis;
     const Eigen::Vector4d fitted = normal.ldlt().solve(basis.transpose() * rest);
     return (rest - basis * fitted).squaredNorm();
   };
-  const int steps = int(std::lround(kSearch / kStep));
+  const int steps = int(std::lround(kRimSearch / kStep));
   std::vector<double> cost(2 * steps + 1);
   for (int i = -steps; i <= steps; ++i) cost[i + steps] = misfit(i);
   const int best = int(std::min_element(cost.begin(), cost.end()) - cost.begin());
