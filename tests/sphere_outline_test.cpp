@@ -86,8 +86,7 @@ void degrade_like_a_merge(std::vector<SphereView>& views) {
     view.alpha.assign(size_t(view.image.width) * view.image.height, 1.0f);
     for (size_t i = 0; i < view.image.pixels.size(); ++i) {
       float& value = view.image.pixels[i];
-      const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
-      value *= 1.0f + 0.01f * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2);
+      value *= 1.0f + 0.01f * standard_normal(rng);
       if (value > 0.0f) {
         const float step = std::exp2(std::floor(std::log2(value))) / 128.0f;
         value = std::round(value / step) * step;
@@ -217,8 +216,7 @@ Environment detailed_landscape() {
   Pcg32 rng(19);
   for (int j = 0; j < map.height; ++j)
     for (int i = 0; i < map.width; ++i) {
-      const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
-      const float detail = std::exp(0.5f * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
+      const float detail = std::exp(0.5f * standard_normal(rng));
       const float level = j < map.height / 2 ? 3.0f : 0.6f;
       map.set(i, j, level * detail * RGB(0.8f, 0.9f, 1.0f));
     }

@@ -197,13 +197,16 @@ inline void expect_all_finite(const nlohmann::json& value, const std::string& wh
   }
 }
 
-// Multiplies every pixel value of the capture set in `folder` by 1 + sigma * N(0, 1)
-// (Gaussian by Box-Muller): sigma = 0.05 is "5% noise".
+// A draw of N(0, 1) from `rng` (Box-Muller, two uniform draws).
+inline float standard_normal(Pcg32& rng) {
+  const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
+  return std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2);
+}
+
+// Multiplies every pixel value of the capture set in `folder` by 1 + sigma * N(0, 1):
+// sigma = 0.05 is "5% noise".
 inline void add_multiplicative_noise(const std::string& folder, float sigma) {
-  rewrite_frames(folder, [sigma](float value, Pcg32& rng) {
-    const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
-    return value * (1.0f + sigma * std::sqrt(-2.0f * std::log(u1)) * std::cos(2.0f * kPi * u2));
-  });
+  rewrite_frames(folder, [sigma](float value, Pcg32& rng) { return value * (1.0f + sigma * standard_normal(rng)); });
 }
 
 // A copy of scenes/red_sphere_office.gltf (the unit sphere, three input views and two
