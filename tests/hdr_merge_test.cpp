@@ -357,6 +357,10 @@ TEST(HdrMerge, CommandMergesAShoot) {
       testing::run_glaze("hdr-merge " + dir.file("shoot") + " --out " + dir.file("out"), dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(contains(run.err, "saturated in every exposure")) << run.err;  // the hot spot
+  // JPEG mixes the channels: said once, naming the first JPEG bracket.
+  const size_t jpeg = run.err.find("holds JPEG photos");
+  EXPECT_NE(jpeg, std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("holds JPEG photos", jpeg + 1), std::string::npos) << run.err;
   const nlohmann::json report = testing::read_json(dir.file("out/hdr_merge.json"));
   ASSERT_EQ(report["brackets"].size(), 2u);
   EXPECT_EQ(report["response"]["method"], "debevec");

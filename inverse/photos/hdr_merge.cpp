@@ -6,6 +6,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <iostream>
 
@@ -109,7 +111,33 @@ void warn_coverage(const Bracket& bracket, const HdrMerge& merge) {
          "at least 2 stops longer (" + seconds_text(longest.exposure * 4) + " s or more)");
 }
 
+namespace {
+
+// JPEG codes a photo's colour as luma and two chroma planes, quantised in 8 x 8 blocks
+// and the chroma (usually) at half resolution, so a channel's code is no longer the tone
+// curve of that channel's exposure alone: on simulated shoots the recovered response,
+// the ball's reflectance and a saturated colour's Rd came out several times as far off
+// as from PNGs (docs/notes/photo-shoots.md, "JPEG photos"). Said once, for the first
+// JPEG bracket.
+void warn_jpeg(std::span<const Bracket> brackets) {
+  for (const Bracket& bracket : brackets)
+    for (const BracketExposure& exposure : bracket.exposures) {
+      std::string extension = exposure.file.extension().string();
+      std::transform(extension.begin(), extension.end(), extension.begin(),
+                     [](unsigned char c) { return char(std::tolower(c)); });
+      if (extension != ".jpg" && extension != ".jpeg") continue;
+      warn(bracket.folder.string() + ": holds JPEG photos (" + exposure.file.filename().string() +
+           "); JPEG's compression mixes the colour channels, so the merged radiance (and the camera response " +
+           "recovered from it) is less accurate than from raw, 16-bit TIFF or PNG photos; shoot those where the " +
+           "camera can");
+      return;
+    }
+}
+
+}  // namespace
+
 CameraResponse bracket_response(std::span<const Bracket> brackets, const std::optional<std::string>& response_file) {
+  warn_jpeg(brackets);
   if (response_file) return read_response(*response_file);
   std::vector<ResponseSamples> samples;
   for (const Bracket& bracket : brackets) {
