@@ -15,11 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
-  return text;
-}
-
 // The first of `keys` that the photo's metadata has.
 std::optional<double> first_attribute(const fs::path& file, std::initializer_list<const char*> keys) {
   for (const char* key : keys)
@@ -74,11 +69,21 @@ void exposures_from_exif(std::vector<BracketExposure>& photos, const fs::path& f
 
 }  // namespace
 
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return text;
+}
+
 bool is_photo_file(const fs::path& file) {
   static const std::set<std::string> kExtensions = {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".dng", ".cr2",
                                                     ".cr3", ".nef",  ".nrw", ".arw", ".orf",  ".rw2", ".raf",
                                                     ".pef", ".srw",  ".x3f", ".3fr", ".iiq",  ".erf"};
-  return kExtensions.count(lower(file.extension().string())) > 0;
+  return kExtensions.count(lowercase(file.extension().string())) > 0;
+}
+
+bool is_jpeg_file(const fs::path& file) {
+  const std::string extension = lowercase(file.extension().string());
+  return extension == ".jpg" || extension == ".jpeg";
 }
 
 Bracket find_bracket(const fs::path& folder) {
@@ -87,7 +92,7 @@ Bracket find_bracket(const fs::path& folder) {
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || name.starts_with(".") || !is_photo_file(entry.path())) continue;
-    if (lower(entry.path().stem().string()) == "board") continue;  // the registration photo
+    if (lowercase(entry.path().stem().string()) == "board") continue;  // the registration photo
     bracket.exposures.push_back({entry.path(), 0.0});
   }
   std::sort(bracket.exposures.begin(), bracket.exposures.end(),

@@ -25,8 +25,13 @@ struct Bracket {
   std::string name() const { return folder.filename().string(); }
 };
 
+// `text` in ASCII lower case: file names and extensions are matched case-blind.
+std::string lowercase(std::string text);
+
 // Whether `file` is a photograph glaze reads by its extension (JPEG, PNG, TIFF, camera raw).
 bool is_photo_file(const std::filesystem::path& file);
+// Whether `file` is a JPEG by its extension (.jpg, .jpeg).
+bool is_jpeg_file(const std::filesystem::path& file);
 
 // The bracket of `folder`. Throws glaze::Error naming the file when a photo's exposure is
 // neither in exposures.json nor in its EXIF ExposureTime, when exposures.json is invalid

@@ -6,8 +6,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include <algorithm>
-#include <cctype>
 #include <cstdio>
 #include <iostream>
 
@@ -122,10 +120,7 @@ namespace {
 void warn_jpeg(std::span<const Bracket> brackets) {
   for (const Bracket& bracket : brackets)
     for (const BracketExposure& exposure : bracket.exposures) {
-      std::string extension = exposure.file.extension().string();
-      std::transform(extension.begin(), extension.end(), extension.begin(),
-                     [](unsigned char c) { return char(std::tolower(c)); });
-      if (extension != ".jpg" && extension != ".jpeg") continue;
+      if (!is_jpeg_file(exposure.file)) continue;
       warn(bracket.folder.string() + ": holds JPEG photos (" + exposure.file.filename().string() +
            "); JPEG's compression mixes the colour channels, so the merged radiance (and the camera response " +
            "recovered from it) is less accurate than from raw, 16-bit TIFF or PNG photos; shoot those where the " +

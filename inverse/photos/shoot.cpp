@@ -1,6 +1,7 @@
 // shoot.cpp: shoot.json, and the photos of a shoot's folders.
 #include "inverse/photos/shoot.h"
 
+#include "inverse/photos/bracket.h"
 #include "renderer/error.h"
 #include "renderer/json_input.h"
 
@@ -176,11 +177,6 @@ ShootProbe read_probe(const json& probe, const std::string& file) {
     }
   }
   return result;
-}
-
-std::string lowercase(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
-  return text;
 }
 
 // The image files directly in `folder` whose name passes `keep`, sorted by name.
