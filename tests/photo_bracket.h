@@ -33,6 +33,17 @@ inline constexpr ToneCurve kSrgbCurve{[](double x) { return double(linear_to_srg
                                       [](double v) { return double(srgb_to_linear(float(v))); }};
 inline constexpr ToneCurve kGamma22Curve{[](double x) { return std::pow(std::clamp(x, 0.0, 1.0), 1.0 / 2.2); },
                                          [](double v) { return std::pow(v, 2.2); }};
+// A filmic S-curve: Narkowicz's fit of ACES's, a(x) = x (2.51 x + 0.03) / (x (2.43 x +
+// 0.59) + 0.14) at x = 4 times the signal, scaled so that the full well gives code 255;
+// and its inverse, the root x >= 0 of the quadratic.
+inline double aces_filmic(double x) { return x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14); }
+inline constexpr ToneCurve kAcesCurve{
+    [](double s) { return aces_filmic(4.0 * std::clamp(s, 0.0, 1.0)) / aces_filmic(4.0); },
+    [](double v) {
+      const double y = v * aces_filmic(4.0);
+      const double a = 2.43 * y - 2.51, b = 0.59 * y - 0.03, c = 0.14 * y;
+      return (-b - std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a) / 4.0;
+    }};
 
 // The scene: a gradient over five decades along x (0.02 to 2000), a texture, a colour,
 // and a hot spot (radius height/8, 50000) that saturates every exposure.

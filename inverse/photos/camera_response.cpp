@@ -226,53 +226,86 @@ struct Ripple {
   }
 };
 
-// The ripple that the data leave free, settled by the smoothness of the forward curve
-// alone. The data cannot tell the curves that the ripple relates apart; a prior must
-// pick one, and it must be one under which tone curves are their own smoothest. Least
-// second differences of f is not: the true f'' has a component with the bracket's
-// period, which the smoothest curve cancels (0.25% of exposure for the film curve of the
-// tests, about 1% for sRGB and a gamma of 2.2). Least third differences nearly is: over
-// the codes settled here, within 0.1-0.2% of the truth for those three and for ACES's
-// filmic curve. Fourth differences would be within 0.01-0.08%, but they amplify what the
-// forward curve carries besides the ripple, and did worse on the simulated shoots
-// (docs/notes/hdr-merge.md).
-// So this finds the periodic shift p of ln exposure that minimises |D3 f~|^2 over knots
-// [first, last], f~(u) = f(u - p(u)) ~ f(u) - f'(u) p(u): linear least squares in p's
-// coefficients. Moving each code's exposure by p then changes nothing the data see:
-// every sample's codes are explained as well, its exposure moved by p too. The knots,
-// not g's codes, are what is differenced: g is linear between codes, and its kinks
-// would swamp D3.
+// The ripple that the data leave free, settled by the shape of the forward curve alone.
+// The data cannot tell the curves that the ripple relates apart; a prior must pick one,
+// and it must be one under which tone curves are their own best. A difference penalty is
+// not quite: least second differences of f cancel the period's component of the true
+// f'' (0.25% of exposure for the film curve of the tests, about 1% for sRGB and a gamma
+// of 2.2), least third differences leave 0.1-0.2%, and fourth differences, within
+// 0.01-0.08%, weigh the short wavelengths so much that they turn the forward curve's
+// noise into ripple. Over the codes settled here (3 to 4 periods of a bracket 2 EV apart)
+// a polynomial of degree 8 in ln exposure follows common tone curves to within a few
+// hundredths of a percent of exposure, and a ripple of the bracket's period is far from
+// any such polynomial: so this takes the ripple whose removal leaves f closest to one, a
+// low-pass measure that passes on less of the noise than third differences do
+// (docs/notes/hdr-merge.md, "The ripple settled by a polynomial").
+// With f~(u) = f(u - p(u)) ~ f(u) - f'(u) p(u) on knots [first, last] and P the
+// projection off the polynomials there, it minimises |P f~|^2: linear least squares in
+// p's coefficients. Over a shorter range (an S-curve's, whose shoulder compresses the
+// exposures into fewer codes) the polynomials come to hold much of the first harmonic,
+// and the noise passed into it grows as one over what is left of it: the degree is the
+// highest, up to kMaxRippleDegree, at which every direction of the ripple keeps
+// kMinRippleSingularValue of its size; with none, the ripple is left as Debevec and
+// Malik's curve had it. Moving each code's exposure by p then changes nothing the data
+// see: every sample's codes are explained as well, its exposure moved by p too.
+constexpr int kMaxRippleDegree = 8;
+constexpr double kMinRippleSingularValue = 0.4;
 Ripple settle_ripple(double period, const Eigen::VectorXd& f, const ForwardKnots& knots, int first, int last) {
-  constexpr int kOrder = 3;
   Ripple ripple;
   // As many harmonics as have three knots or more to the wavelength (4 for a bracket 2 EV
-  // apart, 6 for 3 EV), and a curve long enough to tell them apart.
+  // apart, 6 for 3 EV), on five knots more than unknowns (a line and the harmonics at
+  // the least).
   const int harmonics = int(period / (3.0 * knots.step));
-  if (!(period > 0.0) || harmonics < 1 || last - first < 2 * harmonics + kOrder + 2) return ripple;
+  const int rows = last - first + 1;
+  if (!(period > 0.0) || harmonics < 1 || rows < 2 * harmonics + 7) return ripple;
   ripple.frequency = 2.0 * M_PI / period;
-  const Eigen::VectorXd stencil = difference_stencil(kOrder);
-  const int rows = last - first + 1 - kOrder;
-  Eigen::MatrixXd a(rows, 2 * harmonics);
-  Eigen::VectorXd b(rows);
+  // Each harmonic's shift of f~ (d f~ / d coefficient = -f'(u) harmonic(u)), in units of
+  // its size on the knots.
+  Eigen::MatrixXd shifts(rows, 2 * harmonics);
   for (int r = 0; r < rows; ++r) {
-    b(r) = -stencil.dot(f.segment(first + r, kOrder + 1));
-    for (int column = 0; column < 2 * harmonics; ++column) {
-      a(r, column) = 0.0;
-      for (int m = 0; m <= kOrder; ++m) {
-        const int k = first + r + m;
-        const double slope = (f(k + 1) - f(k - 1)) / (2.0 * knots.step);
-        a(r, column) -= stencil(m) * slope * ripple.harmonic(column, knots.start + k * knots.step);
+    const int k = first + r;
+    const double slope = (f(k + 1) - f(k - 1)) / (2.0 * knots.step);
+    for (int column = 0; column < 2 * harmonics; ++column)
+      shifts(r, column) = -slope * ripple.harmonic(column, knots.start + k * knots.step);
+  }
+  const Eigen::VectorXd size = shifts.colwise().norm().transpose();
+  if (!(size.minCoeff() > 0.0)) return ripple;
+  shifts = shifts * size.cwiseInverse().asDiagonal();
+  for (int degree = kMaxRippleDegree; degree >= 1; --degree) {
+    if (rows < 2 * harmonics + degree + 6) continue;
+    // The polynomials of `degree` on the knots mapped to [-1, 1] (Legendre's, for a
+    // well-conditioned start), orthonormalised.
+    Eigen::MatrixXd polynomials(rows, degree + 1);
+    for (int r = 0; r < rows; ++r) {
+      const double x = 2.0 * r / (rows - 1) - 1.0;
+      double previous = 1.0, current = x;
+      polynomials(r, 0) = 1.0;
+      polynomials(r, 1) = x;
+      for (int n = 1; n < degree; ++n) {
+        const double next = ((2 * n + 1) * x * current - n * previous) / (n + 1);
+        previous = current, current = next;
+        polynomials(r, n + 1) = next;
       }
     }
+    const Eigen::MatrixXd basis =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(polynomials).householderQ() * Eigen::MatrixXd::Identity(rows, degree + 1);
+    const auto off_polynomials = [&](const Eigen::MatrixXd& y) -> Eigen::MatrixXd {
+      return y - basis * (basis.transpose() * y);
+    };
+    const Eigen::MatrixXd a = off_polynomials(shifts);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    if (svd.singularValues().minCoeff() < kMinRippleSingularValue) continue;
+    const Eigen::VectorXd coefficients =
+        svd.solve(Eigen::VectorXd(-off_polynomials(f.segment(first, rows)))).cwiseQuotient(size);
+    if (!coefficients.allFinite()) return ripple;
+    // u + p(u) must keep increasing, or the curve would fold back: |p'| under 1/2 by far,
+    // as a ripple of a few tenths of a percent is (its slope is about 0.02).
+    double steepest = 0.0;
+    for (int h = 0; h < harmonics; ++h)
+      steepest += (h + 1) * ripple.frequency * std::hypot(coefficients(2 * h), coefficients(2 * h + 1));
+    if (steepest < 0.5) ripple.coefficients = coefficients;
+    return ripple;
   }
-  const Eigen::VectorXd coefficients = a.colPivHouseholderQr().solve(b);
-  if (!coefficients.allFinite()) return ripple;
-  // u + p(u) must keep increasing, or the curve would fold back: |p'| under 1/2 by far,
-  // as a ripple of a few tenths of a percent is (its slope is about 0.02).
-  double steepest = 0.0;
-  for (int h = 0; h < harmonics; ++h)
-    steepest += (h + 1) * ripple.frequency * std::hypot(coefficients(2 * h), coefficients(2 * h + 1));
-  if (steepest < 0.5) ripple.coefficients = coefficients;
   return ripple;
 }
 
@@ -330,7 +363,7 @@ void refine_forward(std::span<const ResponseSamples> brackets, const CodeLimits&
   for (int k = 1; k < knots; ++k) f(k) = std::max(f(k), f(k - 1));
   // The knots where the ripple is settled: inside the well-constrained codes, and off
   // the limits, where a curve's clip (a gamma's kink at 255) bends the mean of the codes
-  // that f regresses and, through D3, the ripple (docs/notes/hdr-merge.md).
+  // that f regresses and, through the settle, the ripple (docs/notes/hdr-merge.md).
   int first = 1, last = knots - 2;
   int low = well_constrained[0], high = well_constrained[1];
   while (low < high && weight[low] < kRippleWeight) ++low;
