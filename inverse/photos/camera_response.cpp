@@ -241,8 +241,8 @@ struct Ripple {
 // (docs/notes/hdr-merge.md, "The ripple settled by a polynomial").
 // With f~(u) = f(u - p(u)) ~ f(u) - f'(u) p(u) on knots [first, last] and P the
 // projection off the polynomials there, it minimises |P f~|^2: linear least squares in
-// p's coefficients. Over a shorter range (an S-curve's, whose shoulder compresses the
-// exposures into fewer codes) the polynomials come to hold much of the first harmonic,
+// p's coefficients. Over a shorter range (a contrasty S-curve's, which spends the same
+// codes on fewer stops) the polynomials come to hold much of the first harmonic,
 // and the noise passed into it grows as one over what is left of it: the degree is the
 // highest, up to kMaxRippleDegree, at which every direction of the ripple keeps
 // kMinRippleSingularValue of its size; with none, the ripple is left as Debevec and
