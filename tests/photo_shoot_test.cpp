@@ -130,7 +130,6 @@ EstimateErrors estimate_errors(const nlohmann::json& probe, const SimulatedShoot
 }
 
 void expect_shoot_recovered(const std::string& scene, const std::optional<std::string>& environment, bool calibrate) {
-  const ShootBounds& bounds = kIssueBounds;
   TemporaryDirectory dir;
   const SimulatedShoot truth = simulate_shoot(simulated_shoot(dir, scene, environment, calibrate));
 
@@ -154,7 +153,7 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
                                                      truth.environment.width, truth.environment.height);
   int cells = 0;
   const double probe_rmse = probe_error(probe.map, probe.coverage, true_lighting, truth.hdr_unit, &cells);
-  EXPECT_LT(probe_rmse, bounds.probe);
+  EXPECT_LT(probe_rmse, kIssueBounds.probe);
   EXPECT_GT(cells, 64 * 32 * 9 / 10);
 
   // The material under the probe's lighting.
@@ -165,7 +164,7 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
   const double material_R0 = fit["R0"].get<double>() - truth.material.R0();
   const double material_Rd = largest_error(fit["Rd"], truth.material.Rd());
   EXPECT_LT(std::abs(material_R0), 0.003);
-  EXPECT_LT(material_Rd, bounds.material_Rd);
+  EXPECT_LT(material_Rd, kIssueBounds.material_Rd);
 
   // The chain again without the reflectance: estimated against the joint fit.
   nlohmann::json shoot = read_json(dir.file("shoot/shoot.json"));
@@ -176,9 +175,9 @@ void expect_shoot_recovered(const std::string& scene, const std::optional<std::s
   ASSERT_EQ(estimate.exit_code, 0) << estimate.err;
   const nlohmann::json estimated = read_json(dir.file("estimate/captures_report.json"))["probe"];
   const EstimateErrors errors = estimate_errors(estimated, truth);
-  EXPECT_LT(errors.reflectance, bounds.reflectance) << estimated.dump();
-  EXPECT_LT(std::abs(errors.joint_R0), bounds.joint_R0);
-  EXPECT_LT(errors.joint_Rd, bounds.joint_Rd);
+  EXPECT_LT(errors.reflectance, kIssueBounds.reflectance) << estimated.dump();
+  EXPECT_LT(std::abs(errors.joint_R0), kIssueBounds.joint_R0);
+  EXPECT_LT(errors.joint_Rd, kIssueBounds.joint_Rd);
   std::printf(
       "%s under %s: centre %.3f mm, radius %+.3f%%, probe %.2f%% (%d cells), material R0 %+.4f Rd %.4f, "
       "reflectance %.2f%%, joint R0 %+.4f Rd %.4f\n",

@@ -271,24 +271,26 @@ Ripple settle_ripple(double period, const Eigen::VectorXd& f, const ForwardKnots
   const Eigen::VectorXd size = shifts.colwise().norm().transpose();
   if (!(size.minCoeff() > 0.0)) return ripple;
   shifts = shifts * size.cwiseInverse().asDiagonal();
+  // The polynomials up to kMaxRippleDegree on the knots mapped to [-1, 1] (Legendre's, for
+  // a well-conditioned start); those of a lower degree are the first columns.
+  Eigen::MatrixXd polynomials(rows, kMaxRippleDegree + 1);
+  for (int r = 0; r < rows; ++r) {
+    const double x = 2.0 * r / (rows - 1) - 1.0;
+    double previous = 1.0, current = x;
+    polynomials(r, 0) = 1.0;
+    polynomials(r, 1) = x;
+    for (int n = 1; n < kMaxRippleDegree; ++n) {
+      const double next = ((2 * n + 1) * x * current - n * previous) / (n + 1);
+      previous = current, current = next;
+      polynomials(r, n + 1) = next;
+    }
+  }
   for (int degree = kMaxRippleDegree; degree >= 1; --degree) {
     if (rows < 2 * harmonics + degree + 6) continue;
-    // The polynomials of `degree` on the knots mapped to [-1, 1] (Legendre's, for a
-    // well-conditioned start), orthonormalised.
-    Eigen::MatrixXd polynomials(rows, degree + 1);
-    for (int r = 0; r < rows; ++r) {
-      const double x = 2.0 * r / (rows - 1) - 1.0;
-      double previous = 1.0, current = x;
-      polynomials(r, 0) = 1.0;
-      polynomials(r, 1) = x;
-      for (int n = 1; n < degree; ++n) {
-        const double next = ((2 * n + 1) * x * current - n * previous) / (n + 1);
-        previous = current, current = next;
-        polynomials(r, n + 1) = next;
-      }
-    }
+    // An orthonormal basis of the polynomials of `degree`.
     const Eigen::MatrixXd basis =
-        Eigen::HouseholderQR<Eigen::MatrixXd>(polynomials).householderQ() * Eigen::MatrixXd::Identity(rows, degree + 1);
+        Eigen::HouseholderQR<Eigen::MatrixXd>(polynomials.leftCols(degree + 1)).householderQ() *
+        Eigen::MatrixXd::Identity(rows, degree + 1);
     const auto off_polynomials = [&](const Eigen::MatrixXd& y) -> Eigen::MatrixXd {
       return y - basis * (basis.transpose() * y);
     };
